@@ -1,0 +1,49 @@
+# Two entry points (see README): `make demo` runs the main job, `make test` the test suite.
+# Each installs what it needs: Python 3.12 comes from .python-version (pyenv), everything else
+# from uv.lock into .venv. Nothing here depends on packages installed by hand.
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+
+PYTHON ?= python3
+# Only package registries are reachable: never let uv try to download an interpreter.
+export UV_PYTHON_DOWNLOADS := never
+# Headless rendering (no display on these machines); a user's own setting wins.
+export MUJOCO_GL ?= egl
+export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
+VENV := .venv
+STAMP := $(VENV)/.synced
+
+.PHONY: help setup demo test lint format bench clean
+
+help:
+	@echo "make demo   - the main job (quick start)"
+	@echo "make test   - lint + the test suite"
+	@echo "make bench  - benchmarks (results go to benchmarks/RESULTS.md by hand)"
+
+# Re-sync whenever the lock or the project metadata changes.
+$(STAMP): pyproject.toml uv.lock .python-version
+	$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv>=0.9,<1"
+	$(PYTHON) -m uv sync --locked
+	touch $@
+
+setup: $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/rmb-quickstart --out outputs/quickstart
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+test: lint
+	$(VENV)/bin/python -m pytest -n 2 --durations=15
+
+format: $(STAMP)
+	$(VENV)/bin/ruff format .
+	$(VENV)/bin/ruff check --fix .
+
+bench: $(STAMP)
+	$(VENV)/bin/python benchmarks/depth_codecs.py
+
+clean:
+	rm -rf outputs .pytest_cache

@@ -1,0 +1,360 @@
+"""Read RMB episodes (``NAME.rmb/`` compact directories and ``NAME.hdf5`` single files).
+
+Everything is read lazily: opening an episode parses only the HDF5 header; low-dimensional
+keys are read on indexing and video frames are decoded by random access (seek to the nearest
+key frame), never the whole video for one sample as the original loader does.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import cv2
+import h5py
+import numpy as np
+
+from rmb_lerobot import keys as K
+from rmb_lerobot.codecs.depth import DepthReader, find_depth_file, mm_to_metres
+from rmb_lerobot.codecs.video import RgbVideoReader
+from rmb_lerobot.episode.layout import RGB_VIDEO_SUFFIX, EpisodeFormat, episode_format
+from rmb_lerobot.errors import MissingKeyError, RmbFormatError
+
+logger = logging.getLogger(__name__)
+
+Index = int | slice | list[int] | np.ndarray
+
+
+class H5Series:
+    """A lazily read HDF5 dataset: ``series[i]``/``series[a:b]`` read only what is asked."""
+
+    def __init__(self, dataset: h5py.Dataset, path: Path, transform=None):
+        self._dataset = dataset
+        self._path = path
+        self._transform = transform
+
+    def __len__(self) -> int:
+        return self._dataset.shape[0]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self._dataset.shape
+
+    @property
+    def dtype(self) -> np.dtype:
+        return self._dataset.dtype
+
+    def __getitem__(self, index: Index) -> np.ndarray:
+        if isinstance(index, list | np.ndarray):
+            # h5py needs increasing fancy indices; read sorted unique and scatter back.
+            idx = np.asarray(index, dtype=np.int64) % len(self)
+            uniq, inverse = np.unique(idx, return_inverse=True)
+            data = self._read(uniq.tolist())[inverse]
+        else:
+            data = self._read(index)
+        return data if self._transform is None else self._transform(data)
+
+    def _read(self, index) -> np.ndarray:
+        try:
+            return np.asarray(self._dataset[index])
+        except (OSError, RuntimeError) as exc:
+            raise RmbFormatError(
+                f"cannot read data (corrupt or truncated HDF5?): {exc}",
+                path=self._path,
+                key=self._dataset.name.lstrip("/"),
+            ) from exc
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        data = self[:]
+        return data if dtype is None else data.astype(dtype)
+
+
+class VideoSeries:
+    """Frames of one image key stored as video; decoded by random access."""
+
+    def __init__(self, reader, transform=None):
+        self._reader = reader
+        self._transform = transform
+
+    def __len__(self) -> int:
+        return len(self._reader)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self._reader.shape)
+
+    def __getitem__(self, index: Index) -> np.ndarray:
+        data = self._reader[index]
+        return data if self._transform is None else self._transform(data)
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        data = self[:]
+        return data if dtype is None else data.astype(dtype)
+
+    def close(self) -> None:
+        self._reader.close()
+
+
+def _resize(images: np.ndarray, image_size: tuple[int, int], interpolation: int) -> np.ndarray:
+    """Resize (H, W[, C]) or (N, H, W[, C]) images to ``image_size = (width, height)``."""
+    single = images.ndim == 2 or (images.ndim == 3 and images.shape[-1] == 3 and images.dtype == np.uint8)
+    frames = [images] if single else list(images)
+    out = [cv2.resize(f, image_size, interpolation=interpolation) for f in frames]
+    return out[0] if single else np.stack(out) if out else images
+
+
+def _decode_attr(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8")
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "OSU":
+            return [v.decode("utf-8") if isinstance(v, bytes) else str(v) for v in value.tolist()]
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+class Episode:
+    """One RMB episode. Use :func:`open_episode`; close it (or use ``with``) when done.
+
+    ``ep.keys()`` lists every key; ``len(ep)`` is the number of steps; ``ep[key]`` returns a
+    lazily read series (``ep["time"][:]``, ``ep["front_rgb_image"][i]`` -> uint8 HxWx3,
+    ``ep["front_depth_image"][a:b]`` -> float32 metres NxHxW). With ``cache=True`` every
+    ``ep[key]`` is loaded once into RAM and returned as a numpy array (RMB's option to load the
+    whole dataset into memory).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        image_size: tuple[int, int] | None = None,
+        cache: bool = False,
+        depth_interpolation: int = cv2.INTER_NEAREST,
+    ):
+        self.path = Path(path)
+        self.format = episode_format(self.path)
+        self.image_size = None if image_size is None else (int(image_size[0]), int(image_size[1]))
+        self.cache = cache
+        self._depth_interpolation = depth_interpolation
+        self._cached: dict[str, np.ndarray] = {}
+        self._open_series: list[VideoSeries] = []
+        self._h5_path = self.format.hdf5_path(self.path)
+        if not self._h5_path.exists():
+            raise RmbFormatError(
+                f"episode not found: expected {self.format.describe()}", path=self._h5_path
+            )
+        try:
+            self._h5 = h5py.File(self._h5_path, "r")
+        except OSError as exc:
+            raise RmbFormatError(
+                f"cannot open HDF5 file (truncated or corrupt?): {exc}", path=self._h5_path
+            ) from exc
+        self._video_keys = self._scan_video_keys()
+        self.attrs: dict[str, Any] = self._read_attrs()
+        self._length = self._infer_length()
+
+    # ------------------------------------------------------------------ metadata
+    def _scan_video_keys(self) -> dict[str, Path]:
+        if self.format is not EpisodeFormat.COMPACT:
+            return {}
+        found = {}
+        for entry in sorted(self.path.iterdir()):
+            key = entry.name.removesuffix(RGB_VIDEO_SUFFIX)
+            if entry.name.endswith(RGB_VIDEO_SUFFIX) and K.is_rgb_image_key(key):
+                found[key] = entry
+        for camera_key in self._depth_keys_on_disk():
+            hit = find_depth_file(self.path, camera_key)
+            if hit is not None:
+                found[camera_key] = hit[0]
+        return found
+
+    def _depth_keys_on_disk(self) -> list[str]:
+        names = set()
+        for entry in self.path.iterdir():
+            stem = entry.name.split(".", 1)[0]
+            if K.is_depth_image_key(stem):
+                names.add(stem)
+        return sorted(names)
+
+    def _read_attrs(self) -> dict[str, Any]:
+        attrs = {name: _decode_attr(value) for name, value in self._h5.attrs.items()}
+        for name in K.STRING_LIST_ATTRS:
+            # The original writes empty name lists as empty float64 arrays; normalise to [].
+            if isinstance(attrs.get(name), np.ndarray) and attrs[name].size == 0:
+                attrs[name] = []
+        return attrs
+
+    def _infer_length(self) -> int:
+        if K.TIME in self._h5:
+            return int(self._h5[K.TIME].shape[0])
+        for name in self._h5:
+            return int(self._h5[name].shape[0])
+        for key in self._video_keys:
+            return len(self._open_video(key))
+        return 0
+
+    def keys(self) -> list[str]:
+        """Every key of the episode: HDF5 datasets first, then video-backed image keys."""
+        return [*self._h5.keys(), *self._video_keys]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._h5 or key in self._video_keys
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.keys())
+
+    def __len__(self) -> int:
+        return self._length
+
+    @property
+    def camera_names(self) -> list[str]:
+        """Cameras with image data, in the order of the ``camera_names`` attribute if present."""
+        present = {K.camera_of(k) for k in self.keys() if K.is_image_key(k)}
+        ordered = [c for c in self.attrs.get(K.ATTR_CAMERA_NAMES, []) if c in present]
+        return ordered + sorted(present - set(ordered))
+
+    def fovy(self, camera: str) -> float:
+        """Vertical field of view (degrees) of a depth camera, from the file attributes."""
+        name = K.fovy_attr(camera)
+        if name not in self.attrs:
+            raise MissingKeyError("attribute missing", path=self._h5_path, key=name)
+        return float(self.attrs[name])
+
+    @property
+    def fps(self) -> float:
+        """Control rate from the ``time`` key (never from the videos, which carry none)."""
+        t = np.asarray(self[K.TIME][:], dtype=np.float64)
+        if t.size < 2 or not np.all(np.diff(t) > 0):
+            raise RmbFormatError("'time' must hold at least two increasing values", path=self._h5_path, key=K.TIME)
+        return float((t.size - 1) / (t[-1] - t[0]))
+
+    # ------------------------------------------------------------------ data
+    def __getitem__(self, key: str):
+        if self.cache:
+            if key not in self._cached:
+                self._cached[key] = np.asarray(self._series(key)[:])
+            return self._cached[key]
+        return self._series(key)
+
+    def _series(self, key: str):
+        if key in self._video_keys:
+            return self._video_series(key)
+        if key not in self._h5:
+            raise MissingKeyError(
+                f"key not in episode; available: {self.keys()}", path=self.path, key=key
+            )
+        dataset = self._h5[key]
+        if not isinstance(dataset, h5py.Dataset):
+            raise RmbFormatError("expected a dataset at the file root, found a group", path=self._h5_path, key=key)
+        if dataset.shape[0] != self._length:
+            raise RmbFormatError(
+                f"has {dataset.shape[0]} steps but the episode has {self._length}",
+                path=self._h5_path,
+                key=key,
+            )
+        if K.is_rgb_image_key(key) and self.image_size:
+            return H5Series(dataset, self._h5_path, self._rgb_transform)
+        if K.is_depth_image_key(key):
+            return H5Series(dataset, self._h5_path, self._depth_transform_metres)
+        return H5Series(dataset, self._h5_path)
+
+    def _open_video(self, key: str):
+        path = self._video_keys[key]
+        if K.is_rgb_image_key(key):
+            return RgbVideoReader(path)
+        hit = find_depth_file(self.path, key)
+        if hit is None:  # pragma: no cover - scanned above
+            raise MissingKeyError("depth video vanished", path=path, key=key)
+        return hit[1].reader(hit[0])
+
+    def _video_series(self, key: str) -> VideoSeries:
+        reader = self._open_video(key)
+        if len(reader) != self._length:
+            reader.close()
+            raise RmbFormatError(
+                f"video has {len(reader)} frames but the episode has {self._length} steps",
+                path=self._video_keys[key],
+                key=key,
+            )
+        if K.is_rgb_image_key(key):
+            series = VideoSeries(reader, self._rgb_transform if self.image_size else None)
+        else:
+            series = VideoSeries(reader, self._depth_transform_mm)
+        self._open_series.append(series)
+        return series
+
+    def _rgb_transform(self, images: np.ndarray) -> np.ndarray:
+        return _resize(images, self.image_size, cv2.INTER_LINEAR)
+
+    def _depth_transform_mm(self, depth_mm: np.ndarray) -> np.ndarray:
+        return self._depth_transform_metres(mm_to_metres(depth_mm))
+
+    def _depth_transform_metres(self, depth: np.ndarray) -> np.ndarray:
+        depth = np.asarray(depth, dtype=np.float32)
+        if self.image_size is None:
+            return depth
+        # Nearest neighbour: linear interpolation would invent depths between foreground and
+        # background (flying pixels) and smear "no data" zeros.
+        return _resize(depth, self.image_size, self._depth_interpolation)
+
+    def validate(self) -> None:
+        """Check that every key holds exactly ``len(self)`` steps (videos included)."""
+        for key in self.keys():
+            series = self._series(key)
+            if isinstance(series, VideoSeries):
+                series.close()
+
+    # ------------------------------------------------------------------ lifetime
+    def close(self) -> None:
+        for series in self._open_series:
+            series.close()
+        self._open_series.clear()
+        if self._h5.id.valid:
+            self._h5.close()
+
+    def __enter__(self) -> Episode:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Episode({str(self.path)!r}, format={self.format.value!r}, steps={len(self)})"
+
+
+def open_episode(
+    path: str | Path, *, image_size: tuple[int, int] | None = None, cache: bool = False
+) -> Episode:
+    """Open an RMB episode (``.rmb`` directory or ``.hdf5`` file) for reading.
+
+    ``image_size=(width, height)`` resizes images on read (like RMB's loader); ``cache=True``
+    keeps every key read in RAM.
+    """
+    return Episode(path, image_size=image_size, cache=cache)
+
+
+def find_episodes(*sources: str | Path) -> list[Path]:
+    """Expand files and directories into episode paths, like RMB's dataset scan.
+
+    A directory contributes its ``*.rmb`` and ``*.hdf5`` entries (sorted, not recursive), but
+    never ``*.rmb.hdf5`` (the inner file of a compact episode).
+    """
+    found: list[Path] = []
+    for source in sources:
+        source = Path(source)
+        if source.suffix in (K.COMPACT_SUFFIX, K.SINGLE_HDF5_SUFFIX):
+            found.append(source)
+        elif source.is_dir():
+            for entry in sorted(source.iterdir()):
+                name = entry.name
+                if name.startswith(".") or name.endswith(K.COMPACT_MAIN_FILE.removeprefix("main")):
+                    continue
+                if name.endswith((K.COMPACT_SUFFIX, K.SINGLE_HDF5_SUFFIX)):
+                    found.append(entry)
+        else:
+            raise RmbFormatError("not an episode (.rmb/.hdf5) nor a directory", path=source)
+    return found
