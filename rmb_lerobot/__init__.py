@@ -1,31 +1,53 @@
 """rmb_lerobot: RoboManipBaselines data, environments and policies for LeRobot.
 
-The public entry points for RMB episodes are re-exported here::
+The public entry points for RMB episodes are available here::
 
     import rmb_lerobot
     with rmb_lerobot.open_episode("demo.rmb") as ep:
         ep["front_rgb_image"][0]
+
+They are imported lazily, so ``import rmb_lerobot`` (which LeRobot's plugin discovery does on
+every CLI start) stays cheap until episode I/O is actually used.
 """
 
-from rmb_lerobot.episode import (
-    Episode,
-    EpisodeFormat,
-    EpisodeWriter,
-    find_episodes,
-    open_episode,
-    switch_format,
-)
-from rmb_lerobot.errors import MissingKeyError, RmbFormatError
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "Episode",
-    "EpisodeFormat",
-    "EpisodeWriter",
-    "MissingKeyError",
-    "RmbFormatError",
-    "find_episodes",
-    "open_episode",
-    "switch_format",
-]
+_LAZY = {
+    "Episode": "rmb_lerobot.episode",
+    "EpisodeFormat": "rmb_lerobot.episode",
+    "EpisodeWriter": "rmb_lerobot.episode",
+    "find_episodes": "rmb_lerobot.episode",
+    "open_episode": "rmb_lerobot.episode",
+    "switch_format": "rmb_lerobot.episode",
+    "MissingKeyError": "rmb_lerobot.errors",
+    "RmbFormatError": "rmb_lerobot.errors",
+}
+__all__ = sorted(_LAZY)
+
+if TYPE_CHECKING:
+    from rmb_lerobot.episode import (
+        Episode,
+        EpisodeFormat,
+        EpisodeWriter,
+        find_episodes,
+        open_episode,
+        switch_format,
+    )
+    from rmb_lerobot.errors import MissingKeyError, RmbFormatError
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'rmb_lerobot' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_LAZY])

@@ -1,0 +1,147 @@
+"""Shared fixtures: small synthetic episodes, and the ORIGINAL RMB's I/O recipe.
+
+``write_like_original``/``read_like_original`` re-implement, independently of our package, what
+RoboManipBaselines' ``DataManager.dump_to_rmb`` and ``RmbData`` do (h5py datasets from
+``np.array(list)``, ``videoio.videosave``/``uint16save`` through FFmpeg, full-video decoding),
+using PyAV in place of the ffmpeg binary. They let the tests check compatibility both ways.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import av
+import h5py
+import numpy as np
+import pytest
+
+from rmb_lerobot import EpisodeWriter
+from rmb_lerobot.kinematics import UR5E
+from rmb_lerobot.synthetic import ur5e_attrs, ur5e_steps
+
+CAMERAS = ("front", "hand")
+SIZE = (64, 48)
+STEPS = 12
+
+
+@pytest.fixture
+def steps() -> list[dict]:
+    return list(ur5e_steps(STEPS, CAMERAS, SIZE, seed=1))
+
+
+@pytest.fixture
+def attrs() -> dict:
+    return ur5e_attrs(CAMERAS)
+
+
+@pytest.fixture
+def record(steps, attrs):
+    """Write the synthetic episode to ``path`` and return the path."""
+
+    def _record(path: Path, **kwargs) -> Path:
+        with EpisodeWriter(path, attrs, fk=UR5E, **kwargs) as writer:
+            for step in steps:
+                writer.append(step)
+        return path
+
+    return _record
+
+
+def _encode(path: Path, frames: list[np.ndarray], pix_fmt: str, options: dict, planar: bool):
+    # Like ffmpeg reading rawvideo from a pipe with no -framerate: 25 fps, no frame rate stored.
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream("libx264", rate=25, options=options)
+        stream.height, stream.width = frames[0].shape[-2:] if planar else frames[0].shape[:2]
+        stream.pix_fmt = pix_fmt
+        for frame in frames:
+            if planar:
+                video_frame = av.VideoFrame.from_ndarray(frame, format="yuv444p")
+            else:
+                video_frame = av.VideoFrame.from_ndarray(frame, format="rgb24").reformat(format=pix_fmt)
+            container.mux(stream.encode(video_frame))
+        container.mux(stream.encode(None))
+
+
+def videoio_fold(depth_mm: np.ndarray) -> np.ndarray:
+    """videoio.uint16save's frame layout: planes (Y, U, V) = (folded low byte, 0, high byte)."""
+    upper = (depth_mm / 256).astype(np.uint8)
+    lower = (depth_mm % 256).astype(np.uint8)
+    odd = upper % 2 == 1
+    lower[odd] = 255 - lower[odd]
+    return np.stack([lower, np.zeros_like(lower), upper])
+
+
+def videoio_unfold(planes: np.ndarray) -> np.ndarray:
+    upper, lower = planes[2], planes[0].copy()
+    odd = upper % 2 == 1
+    lower[odd] = 255 - lower[odd]
+    return lower.astype(np.uint16) + upper.astype(np.uint16) * 256
+
+
+@pytest.fixture
+def write_like_original():
+    """DataManager.dump_to_rmb / dump_to_hdf5 of the original RMB, step lists in RAM."""
+
+    def _write(path: Path, steps: list[dict], meta: dict) -> Path:
+        seq = {key: [step[key] for step in steps] for key in steps[0]}
+        compact = path.suffix == ".rmb"
+        if compact:
+            path.mkdir()
+        h5_path = path / "main.rmb.hdf5" if compact else path
+        with h5py.File(h5_path, "w") as h5:
+            for key, values in seq.items():
+                if compact and key.endswith("_rgb_image"):
+                    _encode(path / f"{key}.rmb.mp4", values, "yuv420p", {"preset": "slow"}, planar=False)
+                elif compact and key.endswith("_depth_image"):
+                    depth_mm = (1e3 * np.array(values)).astype(np.uint16)  # truncation, as the original
+                    frames = [videoio_fold(d) for d in depth_mm]
+                    options = {"preset": "slow", "crf": "0", "profile": "high444"}
+                    _encode(path / f"{key}.rmb.mp4", frames, "yuv444p", options, planar=True)
+                else:
+                    h5.create_dataset(key, data=np.array(values))
+            for key, value in meta.items():
+                h5.attrs[key] = value
+            h5.attrs["format"] = "RmbData-Compact" if compact else "RmbData-SingleHDF5"
+        return path
+
+    return _write
+
+
+@pytest.fixture
+def read_like_original():
+    """RmbData's read path: h5py datasets, whole-video decode (rgb24 / yuv444p + unfold)."""
+
+    def _decode(video: Path, fmt: str) -> list[np.ndarray]:
+        with av.open(str(video)) as container:
+            return [frame.to_ndarray(format=fmt) for frame in container.decode(video=0)]
+
+    def _read(path: Path) -> tuple[dict[str, np.ndarray], dict]:
+        compact = path.suffix == ".rmb"
+        h5_path = path / "main.rmb.hdf5" if compact else path
+        data = {}
+        with h5py.File(h5_path, "r") as h5:
+            for key in h5.keys():
+                data[key] = h5[key][()]
+            attrs = dict(h5.attrs)
+        if compact:
+            for video in path.glob("*.rmb.mp4"):
+                key = video.name.removesuffix(".rmb.mp4")
+                if key.endswith("_rgb_image"):
+                    data[key] = np.stack(_decode(video, "rgb24"))
+                elif key.endswith("_depth_image"):
+                    frames = _decode(video, "yuv444p")
+                    data[key] = (1e-3 * np.stack([videoio_unfold(f) for f in frames])).astype(np.float32)
+        return data, attrs
+
+    return _read
+
+
+@pytest.fixture
+def psnr():
+    """Peak signal-to-noise ratio of uint8 images, in dB."""
+
+    def _psnr(a: np.ndarray, b: np.ndarray) -> float:
+        mse = np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2)
+        return float("inf") if mse == 0 else float(10 * np.log10(255**2 / mse))
+
+    return _psnr
