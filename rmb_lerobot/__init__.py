@@ -27,9 +27,18 @@ _LAZY = {
     "MissingKeyError": "rmb_lerobot.errors",
     "RmbFormatError": "rmb_lerobot.errors",
 }
-__all__ = sorted(_LAZY)
+__all__ = [
+    "Episode",
+    "EpisodeFormat",
+    "EpisodeWriter",
+    "MissingKeyError",
+    "RmbFormatError",
+    "find_episodes",
+    "open_episode",
+    "switch_format",
+]
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # what static type checkers and IDEs see
     from rmb_lerobot.episode import (
         Episode,
         EpisodeFormat,

@@ -34,10 +34,17 @@ class DHChain:
         if q.shape[-1] < self.num_joints:
             raise ValueError(f"expected at least {self.num_joints} joint values, got {q.shape}")
         out = np.eye(4)
-        for theta, a, d, alpha in zip(q[: self.num_joints], self.a, self.d, self.alpha, strict=True):
+        for theta, a, d, alpha in zip(
+            q[: self.num_joints], self.a, self.d, self.alpha, strict=True
+        ):
             ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
             out = out @ np.array(
-                [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+                [
+                    [ct, -st * ca, st * sa, a * ct],
+                    [st, ct * ca, -ct * sa, a * st],
+                    [0, sa, ca, d],
+                    [0, 0, 0, 1],
+                ]
             )
         return out
 

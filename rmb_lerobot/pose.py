@@ -64,7 +64,7 @@ def matrix_to_pose(matrix: np.ndarray) -> np.ndarray:
 
 
 def relative_pose(prev_pose: np.ndarray, current_pose: np.ndarray) -> np.ndarray:
-    """``prev^-1 * current`` as ``(tx, ty, tz, roll, pitch, yaw)``, exactly RMB's ``*_eef_pose_rel``."""
+    """``prev^-1 * current`` as ``(tx, ty, tz, roll, pitch, yaw)``: RMB's ``*_eef_pose_rel``."""
     prev = pose_to_matrix(prev_pose)
     cur = pose_to_matrix(current_pose)
     rel = np.linalg.inv(prev) @ cur

@@ -48,7 +48,5 @@ def registered_policy_types() -> list[str]:
 
     ours = set(POLICY_CONFIG_MODULES)
     return sorted(
-        name
-        for name, cls in PreTrainedConfig.get_known_choices().items()
-        if cls.__module__ in ours
+        name for name, cls in PreTrainedConfig.get_known_choices().items() if cls.__module__ in ours
     )

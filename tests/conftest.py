@@ -57,7 +57,9 @@ def _encode(path: Path, frames: list[np.ndarray], pix_fmt: str, options: dict, p
             if planar:
                 video_frame = av.VideoFrame.from_ndarray(frame, format="yuv444p")
             else:
-                video_frame = av.VideoFrame.from_ndarray(frame, format="rgb24").reformat(format=pix_fmt)
+                video_frame = av.VideoFrame.from_ndarray(frame, format="rgb24").reformat(
+                    format=pix_fmt
+                )
             container.mux(stream.encode(video_frame))
         container.mux(stream.encode(None))
 
@@ -91,9 +93,13 @@ def write_like_original():
         with h5py.File(h5_path, "w") as h5:
             for key, values in seq.items():
                 if compact and key.endswith("_rgb_image"):
-                    _encode(path / f"{key}.rmb.mp4", values, "yuv420p", {"preset": "slow"}, planar=False)
+                    _encode(
+                        path / f"{key}.rmb.mp4", values, "yuv420p", {"preset": "slow"}, planar=False
+                    )
                 elif compact and key.endswith("_depth_image"):
-                    depth_mm = (1e3 * np.array(values)).astype(np.uint16)  # truncation, as the original
+                    depth_mm = (1e3 * np.array(values)).astype(
+                        np.uint16
+                    )  # truncation, as the original
                     frames = [videoio_fold(d) for d in depth_mm]
                     options = {"preset": "slow", "crf": "0", "profile": "high444"}
                     _encode(path / f"{key}.rmb.mp4", frames, "yuv444p", options, planar=True)
@@ -120,7 +126,7 @@ def read_like_original():
         h5_path = path / "main.rmb.hdf5" if compact else path
         data = {}
         with h5py.File(h5_path, "r") as h5:
-            for key in h5.keys():
+            for key in h5:
                 data[key] = h5[key][()]
             attrs = dict(h5.attrs)
         if compact:
@@ -130,7 +136,9 @@ def read_like_original():
                     data[key] = np.stack(_decode(video, "rgb24"))
                 elif key.endswith("_depth_image"):
                     frames = _decode(video, "yuv444p")
-                    data[key] = (1e-3 * np.stack([videoio_unfold(f) for f in frames])).astype(np.float32)
+                    data[key] = (1e-3 * np.stack([videoio_unfold(f) for f in frames])).astype(
+                        np.float32
+                    )
         return data, attrs
 
     return _read

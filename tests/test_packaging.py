@@ -45,7 +45,9 @@ def test_no_generic_top_level_modules_are_installed(tmp_path):
         "assert u.find_spec('rmb_lerobot.envs') and u.find_spec('rmb_lerobot.converters'); "
         "assert not any(u.find_spec(m) for m in ('envs', 'converters', 'policies_extra'))"
     )
-    result = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True
+    )
     assert result.returncode == 0, result.stderr
 
 
@@ -53,4 +55,3 @@ def test_console_scripts_point_at_real_functions():
     for name, target in PYPROJECT["project"]["scripts"].items():
         module, _, func = target.partition(":")
         assert callable(getattr(importlib.import_module(module), func)), name
-

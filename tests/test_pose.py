@@ -36,7 +36,9 @@ def test_rpy_convention_is_pinocchios_zyx():
     roll, pitch, yaw = 0.1, -0.2, 0.3
     rel = pose.rel_pose_to_matrix([0, 0, 0, roll, pitch, yaw])[:3, :3]
     rx = np.array([[1, 0, 0], [0, np.cos(roll), -np.sin(roll)], [0, np.sin(roll), np.cos(roll)]])
-    ry = np.array([[np.cos(pitch), 0, np.sin(pitch)], [0, 1, 0], [-np.sin(pitch), 0, np.cos(pitch)]])
+    ry = np.array(
+        [[np.cos(pitch), 0, np.sin(pitch)], [0, 1, 0], [-np.sin(pitch), 0, np.cos(pitch)]]
+    )
     rz = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]])
     np.testing.assert_allclose(rel, rz @ ry @ rx, atol=1e-12)
 

@@ -9,12 +9,18 @@ from rmb_lerobot import registration
 
 def run_python(code: str, cwd) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(code)], cwd=cwd, capture_output=True, text=True, timeout=300
+        [sys.executable, "-c", textwrap.dedent(code)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 
 def test_plugin_module_imports_in_a_fresh_interpreter(tmp_path):
-    result = run_python("import lerobot_env_rmb; print(lerobot_env_rmb.REGISTERED_MODULES)", tmp_path)
+    result = run_python(
+        "import lerobot_env_rmb; print(lerobot_env_rmb.REGISTERED_MODULES)", tmp_path
+    )
     assert result.returncode == 0, result.stderr
 
 

@@ -46,8 +46,10 @@ def record(path: Path, steps: int, cameras: tuple[str, ...], size: tuple[int, in
 def summarize(path: Path) -> list[str]:
     lines = [f"{path}  ({_size_mb(path):.2f} MB)"]
     with open_episode(path) as ep:
-        lines.append(f"  format={ep.format.value} steps={len(ep)} fps={ep.fps:.2f} cameras={ep.camera_names}")
-        for key in ep.keys():
+        lines.append(
+            f"  format={ep.format.value} steps={len(ep)} fps={ep.fps:.2f} cameras={ep.camera_names}"
+        )
+        for key in ep:
             series = ep[key]
             sample = series[0]
             lines.append(f"  {key:32s} {tuple(series.shape)!s:22s} {sample.dtype}")
@@ -60,7 +62,7 @@ def compare(a: Path, b: Path) -> list[str]:
     """How far two recordings of the same episode are apart, key by key."""
     lines = [f"{a.name} vs {b.name}"]
     with open_episode(a) as ea, open_episode(b) as eb:
-        for key in ea.keys():
+        for key in ea:
             x, y = np.asarray(ea[key][:]), np.asarray(eb[key][:])
             if K.is_rgb_image_key(key):
                 lines.append(f"  {key:32s} PSNR {_psnr(x, y):.1f} dB")

@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 
 from rmb_lerobot import keys as K
-from rmb_lerobot.codecs.depth import DepthReader, find_depth_file, mm_to_metres
+from rmb_lerobot.codecs.depth import find_depth_file, mm_to_metres
 from rmb_lerobot.codecs.video import RgbVideoReader
 from rmb_lerobot.episode.layout import RGB_VIDEO_SUFFIX, EpisodeFormat, episode_format
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError
@@ -99,7 +99,9 @@ class VideoSeries:
 
 def _resize(images: np.ndarray, image_size: tuple[int, int], interpolation: int) -> np.ndarray:
     """Resize (H, W[, C]) or (N, H, W[, C]) images to ``image_size = (width, height)``."""
-    single = images.ndim == 2 or (images.ndim == 3 and images.shape[-1] == 3 and images.dtype == np.uint8)
+    single = images.ndim == 2 or (
+        images.ndim == 3 and images.shape[-1] == 3 and images.dtype == np.uint8
+    )
     frames = [images] if single else list(images)
     out = [cv2.resize(f, image_size, interpolation=interpolation) for f in frames]
     return out[0] if single else np.stack(out) if out else images
@@ -229,7 +231,9 @@ class Episode:
         """Control rate from the ``time`` key (never from the videos, which carry none)."""
         t = np.asarray(self[K.TIME][:], dtype=np.float64)
         if t.size < 2 or not np.all(np.diff(t) > 0):
-            raise RmbFormatError("'time' must hold at least two increasing values", path=self._h5_path, key=K.TIME)
+            raise RmbFormatError(
+                "'time' must hold at least two increasing values", path=self._h5_path, key=K.TIME
+            )
         return float((t.size - 1) / (t[-1] - t[0]))
 
     # ------------------------------------------------------------------ data
@@ -249,7 +253,9 @@ class Episode:
             )
         dataset = self._h5[key]
         if not isinstance(dataset, h5py.Dataset):
-            raise RmbFormatError("expected a dataset at the file root, found a group", path=self._h5_path, key=key)
+            raise RmbFormatError(
+                "expected a dataset at the file root, found a group", path=self._h5_path, key=key
+            )
         if dataset.shape[0] != self._length:
             raise RmbFormatError(
                 f"has {dataset.shape[0]} steps but the episode has {self._length}",

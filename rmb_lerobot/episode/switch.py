@@ -30,8 +30,8 @@ def switch_format(
     with open_episode(src) as episode:
         episode.validate()
         attrs = {k: v for k, v in episode.attrs.items() if k != K.ATTR_FORMAT}
-        lowdim = {k: np.asarray(episode[k][:]) for k in episode.keys() if not K.is_image_key(k)}
-        images = {k: episode[k] for k in episode.keys() if K.is_image_key(k)}
+        lowdim = {k: np.asarray(episode[k][:]) for k in episode if not K.is_image_key(k)}
+        images = {k: episode[k] for k in episode if K.is_image_key(k)}
         with EpisodeWriter(
             dst, attrs, derive_relative=False, depth_codec=depth_codec, overwrite=overwrite
         ) as writer:

@@ -91,7 +91,9 @@ class EpisodeWriter:
                 f"format {fmt!r} does not match the extension {self.path.suffix!r}", path=self.path
             )
         if self.path.exists() and not overwrite:
-            raise RmbFormatError("destination exists (pass overwrite=True to replace it)", path=self.path)
+            raise RmbFormatError(
+                "destination exists (pass overwrite=True to replace it)", path=self.path
+            )
         self.attrs = dict(attrs or {})
         self.fk = fk
         self.derive_relative = derive_relative
@@ -124,7 +126,9 @@ class EpisodeWriter:
         if self.fk is not None:
             for joint_key, pose_key in _FK_TARGETS.items():
                 if joint_key in step and pose_key not in step:
-                    step[pose_key] = np.asarray(self.fk(np.asarray(step[joint_key])), dtype=np.float64)
+                    step[pose_key] = np.asarray(
+                        self.fk(np.asarray(step[joint_key])), dtype=np.float64
+                    )
         self._check_keys(step)
         # Validate everything before writing anything, so a bad step leaves no partial step.
         arrays = {key: self._check_value(key, value) for key, value in step.items()}
@@ -138,7 +142,11 @@ class EpisodeWriter:
     def _check_keys(self, step: Mapping[str, Any]) -> None:
         if self._num_steps == 0:
             if K.TIME not in step:
-                raise RmbFormatError(f"every step needs {K.TIME!r} (the control rate comes from it)", path=self.path, key=K.TIME)
+                raise RmbFormatError(
+                    f"every step needs {K.TIME!r} (the control rate comes from it)",
+                    path=self.path,
+                    key=K.TIME,
+                )
             return
         expected = set(self._shapes)
         missing, extra = expected - set(step), set(step) - expected
@@ -153,7 +161,9 @@ class EpisodeWriter:
     def _check_value(self, key: str, value: Any) -> np.ndarray:
         array = np.asarray(value)
         if array.dtype.kind not in "biuf":
-            raise RmbFormatError(f"expected numbers, got dtype {array.dtype}", path=self.path, key=key)
+            raise RmbFormatError(
+                f"expected numbers, got dtype {array.dtype}", path=self.path, key=key
+            )
         if K.is_rgb_image_key(key):
             if array.dtype != np.uint8 or array.ndim != 3 or array.shape[2] != 3:
                 raise RmbFormatError(
@@ -170,9 +180,13 @@ class EpisodeWriter:
                     key=key,
                 )
             if array.dtype.kind == "u" and array.dtype != np.uint16:
-                raise RmbFormatError(f"integer depth must be uint16 mm, got {array.dtype}", path=self.path, key=key)
+                raise RmbFormatError(
+                    f"integer depth must be uint16 mm, got {array.dtype}", path=self.path, key=key
+                )
         elif key in K.KEYS and K.KEYS[key].quantity is None and array.ndim != 0:
-            raise RmbFormatError(f"expected a scalar, got shape {array.shape}", path=self.path, key=key)
+            raise RmbFormatError(
+                f"expected a scalar, got shape {array.shape}", path=self.path, key=key
+            )
         seen = self._shapes.get(key)
         if seen is None:
             self._shapes[key] = (array.shape, array.dtype)
@@ -190,7 +204,9 @@ class EpisodeWriter:
             if encoder is None:
                 height, width = image.shape[:2]
                 if K.is_rgb_image_key(key):
-                    encoder = RgbVideoWriter(rgb_video_path(self._tmp, key), width, height, **self._rgb_options)
+                    encoder = RgbVideoWriter(
+                        rgb_video_path(self._tmp, key), width, height, **self._rgb_options
+                    )
                 else:
                     target = self._tmp / f"{key}{self._depth_codec.file_suffix}"
                     encoder = self._depth_codec.writer(target, width, height)
@@ -203,7 +219,10 @@ class EpisodeWriter:
         dataset = self._h5.get(key)
         if dataset is None:
             dataset = self._h5.create_dataset(
-                key, shape=(0, *image.shape), maxshape=(None, *image.shape), dtype=image.dtype,
+                key,
+                shape=(0, *image.shape),
+                maxshape=(None, *image.shape),
+                dtype=image.dtype,
                 chunks=(1, *image.shape),
             )
         dataset.resize(self._num_steps + 1, axis=0)
@@ -224,7 +243,9 @@ class EpisodeWriter:
             values = data[key]
             if spec.quantity is K.Quantity.EEF_POSE:
                 poses = values.reshape(len(values), -1, 7)
-                rels = np.stack([relative_pose_sequence(poses[:, i]) for i in range(poses.shape[1])], 1)
+                rels = np.stack(
+                    [relative_pose_sequence(poses[:, i]) for i in range(poses.shape[1])], 1
+                )
                 derived[rel] = rels.reshape(len(values), -1)
             else:
                 diff = np.zeros_like(values)
@@ -248,7 +269,9 @@ class EpisodeWriter:
         attrs[K.ATTR_FORMAT] = self.format.value
         for camera in cameras:
             if K.depth_image_key(camera) in self._shapes and K.fovy_attr(camera) not in attrs:
-                logger.warning("%s: no %s attribute; point clouds need it", self.path, K.fovy_attr(camera))
+                logger.warning(
+                    "%s: no %s attribute; point clouds need it", self.path, K.fovy_attr(camera)
+                )
         return attrs
 
     def close(self) -> Path:
@@ -264,7 +287,11 @@ class EpisodeWriter:
             self._encoders.clear()
             data = {key: np.stack(values) for key, values in self._lowdim.items()}
             data.update(self._derived_keys(data))
-            h5 = self._h5 if self._h5 is not None else h5py.File(self._tmp / K.COMPACT_MAIN_FILE, "w")
+            h5 = (
+                self._h5
+                if self._h5 is not None
+                else h5py.File(self._tmp / K.COMPACT_MAIN_FILE, "w")
+            )
             with h5:
                 for key, values in data.items():
                     h5.create_dataset(key, data=values)
@@ -284,7 +311,9 @@ class EpisodeWriter:
             os.replace(self._tmp, self.path)
             return
         if not self.overwrite:
-            raise RmbFormatError("destination appeared while recording; not overwriting", path=self.path)
+            raise RmbFormatError(
+                "destination appeared while recording; not overwriting", path=self.path
+            )
         # Swap via a trash name so the destination is never missing a complete episode.
         trash = self.path.with_name(f".{self.path.name}.old-{uuid.uuid4().hex[:8]}")
         os.replace(self.path, trash)

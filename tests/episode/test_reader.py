@@ -63,20 +63,28 @@ def test_keys_list_datasets_and_videos(tmp_path, record):
         assert "front_rgb_image" in ep and "back_rgb_image" not in ep
 
 
-def test_episodes_written_by_the_original_rmb_read_correctly(tmp_path, steps, attrs, write_like_original, psnr):
+def test_episodes_written_by_the_original_rmb_read_correctly(
+    tmp_path, steps, attrs, write_like_original, psnr
+):
     meta = {**attrs, "version": "1.0.0", "rgb_tactile_names": [], "camera_names": ["front", "hand"]}
     path = write_like_original(tmp_path / "original.rmb", steps, meta)
     with open_episode(path) as ep:
         assert len(ep) == 12 and ep.attrs["rgb_tactile_names"] == []
         assert ep.attrs["camera_names"] == ["front", "hand"]
-        np.testing.assert_array_equal(ep["measured_joint_pos"][:], np.stack([s["measured_joint_pos"] for s in steps]))
+        np.testing.assert_array_equal(
+            ep["measured_joint_pos"][:], np.stack([s["measured_joint_pos"] for s in steps])
+        )
         truth = np.stack([s["front_depth_image"] for s in steps])
         # The original truncates to millimetres: we read exactly what it stored.
-        np.testing.assert_array_equal(ep["front_depth_image"][:], (truth * 1e3).astype(np.uint16) / np.float32(1e3))
+        np.testing.assert_array_equal(
+            ep["front_depth_image"][:], (truth * 1e3).astype(np.uint16) / np.float32(1e3)
+        )
         assert psnr(ep["hand_rgb_image"][5], steps[5]["hand_rgb_image"]) > 30
 
 
-def test_episodes_we_write_read_with_the_original_loader(tmp_path, record, steps, read_like_original, psnr):
+def test_episodes_we_write_read_with_the_original_loader(
+    tmp_path, record, steps, read_like_original, psnr
+):
     ours = record(tmp_path / "demo.rmb")
     data, attrs = read_like_original(ours)
     assert attrs["format"] == "RmbData-Compact"
@@ -85,19 +93,21 @@ def test_episodes_we_write_read_with_the_original_loader(tmp_path, record, steps
     assert psnr(data["front_rgb_image"], np.stack([s["front_rgb_image"] for s in steps])) > 30
     truth = np.stack([s["hand_depth_image"] for s in steps])
     assert np.abs(data["hand_depth_image"] - truth).max() <= 0.0005 + 1e-6
-    np.testing.assert_array_equal(data["command_joint_pos"], np.stack([s["command_joint_pos"] for s in steps]))
+    np.testing.assert_array_equal(
+        data["command_joint_pos"], np.stack([s["command_joint_pos"] for s in steps])
+    )
 
 
 # ---------------------------------------------------------------- bad input
 def test_wrong_extension_is_named(tmp_path):
-    with pytest.raises(RmbFormatError, match="invalid episode extension '.zip'") as info:
+    with pytest.raises(RmbFormatError, match=r"invalid episode extension '\.zip'") as info:
         open_episode(tmp_path / "demo.zip")
     assert info.value.path == tmp_path / "demo.zip"
 
 
 def test_inner_file_of_a_compact_episode_is_refused_with_a_hint(tmp_path, record):
     path = record(tmp_path / "demo.rmb")
-    with pytest.raises(RmbFormatError, match="open its .rmb directory"):
+    with pytest.raises(RmbFormatError, match=r"open its \.rmb directory"):
         open_episode(path / "main.rmb.hdf5")
 
 
@@ -110,9 +120,11 @@ def test_truncated_hdf5_is_reported_with_its_file(tmp_path, record):
     path = record(tmp_path / "demo.hdf5")
     data = path.read_bytes()
     path.write_bytes(data[: len(data) // 3])
-    with pytest.raises(RmbFormatError, match="truncated or corrupt") as info:
-        with open_episode(path) as ep:
-            ep["front_rgb_image"][:]
+    with (
+        pytest.raises(RmbFormatError, match="truncated or corrupt") as info,
+        open_episode(path) as ep,
+    ):
+        ep["front_rgb_image"][:]
     assert info.value.path == path
 
 
@@ -157,7 +169,10 @@ def test_length_mismatch_between_keys_and_video_frames_is_reported(tmp_path, rec
         for step in steps + steps[:3]:
             writer.append(step)
     (short / "front_rgb_image.rmb.mp4").write_bytes((long / "front_rgb_image.rmb.mp4").read_bytes())
-    with open_episode(short) as ep, pytest.raises(RmbFormatError, match="video has 15 frames but the episode has 12"):
+    with (
+        open_episode(short) as ep,
+        pytest.raises(RmbFormatError, match="video has 15 frames but the episode has 12"),
+    ):
         ep["front_rgb_image"]
 
 

@@ -17,7 +17,7 @@ def test_switch_keeps_keys_attributes_and_data(tmp_path, record, psnr, src_name,
         assert a.attrs.keys() == b.attrs.keys()
         for name in a.attrs:
             np.testing.assert_array_equal(a.attrs[name], b.attrs[name])
-        for key in a.keys():
+        for key in a:
             x, y = a[key][:], b[key][:]
             if K.is_rgb_image_key(key):
                 assert psnr(x, y) > 30

@@ -36,7 +36,12 @@ def test_single_hdf5_stores_images_as_datasets(tmp_path, record, steps):
     path = record(tmp_path / "demo.hdf5")
     with h5py.File(path) as h5:
         assert h5.attrs["format"] == "RmbData-SingleHDF5"
-        assert h5["front_rgb_image"].dtype == np.uint8 and h5["front_rgb_image"].shape == (12, 48, 64, 3)
+        assert h5["front_rgb_image"].dtype == np.uint8 and h5["front_rgb_image"].shape == (
+            12,
+            48,
+            64,
+            3,
+        )
         assert h5["front_depth_image"].dtype == np.float32
         np.testing.assert_array_equal(h5["front_rgb_image"][3], steps[3]["front_rgb_image"])
         np.testing.assert_array_equal(h5["hand_depth_image"][5], steps[5]["hand_depth_image"])
@@ -150,7 +155,7 @@ def test_empty_episode_is_not_written(tmp_path, attrs):
 
 
 def test_extension_and_format_must_agree(tmp_path):
-    with pytest.raises(RmbFormatError, match="invalid episode extension '.h5'"):
+    with pytest.raises(RmbFormatError, match=r"invalid episode extension '\.h5'"):
         EpisodeWriter(tmp_path / "demo.h5")
     with pytest.raises(RmbFormatError, match="does not match the extension"):
         EpisodeWriter(tmp_path / "demo.rmb", fmt="hdf5")
