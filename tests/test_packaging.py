@@ -55,3 +55,11 @@ def test_console_scripts_point_at_real_functions():
     for name, target in PYPROJECT["project"]["scripts"].items():
         module, _, func = target.partition(":")
         assert callable(getattr(importlib.import_module(module), func)), name
+
+
+def test_lazy_public_names_resolve():
+    import rmb_lerobot
+
+    assert sorted(rmb_lerobot.__all__) == sorted(rmb_lerobot._LAZY)
+    for name in rmb_lerobot.__all__:
+        assert getattr(rmb_lerobot, name) is not None
