@@ -4,7 +4,7 @@ Codecs:
 
 - ``rmb-videoio``: the original RMB depth video, lossless (``<camera>_depth_image.rmb.mp4``).
 - ``rmbz``: ours, max error 1 mm, smaller and with cheap random access
-  (``<camera>_depth_image.rmbz.h5``); ``rmbz-exact`` is the same codec without quantisation.
+  (``<camera>_depth_image.rmbz``); ``rmbz-exact`` is the same codec without quantisation.
 
 Typical use::
 

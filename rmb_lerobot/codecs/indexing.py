@@ -21,7 +21,7 @@ def resolve_index(index: FrameIndex, length: int) -> tuple[list[int], bool]:
         return [_check(operator.index(index), length)], True
     if isinstance(index, np.ndarray):
         if index.ndim != 1 or not np.issubdtype(index.dtype, np.integer):
-            raise TypeError(f"frame index array must be 1-D integers, got {index.dtype} {index.shape}")
+            raise TypeError(f"frame index array must be 1-D ints, got {index.dtype} {index.shape}")
         return [_check(int(i), length) for i in index], False
     if isinstance(index, (list, tuple)):
         return [_check(operator.index(i), length) for i in index], False

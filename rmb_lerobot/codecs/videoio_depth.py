@@ -41,9 +41,7 @@ def unfold_depth(y: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 class VideoioDepthWriter(DepthWriter):
-    def __init__(
-        self, path: str | Path, width: int, height: int, *, preset: str, gop: int | None
-    ):
+    def __init__(self, path: str | Path, width: int, height: int, *, preset: str, gop: int | None):
         options = {"crf": "0", "preset": preset, "profile": "high444"}
         if gop is not None:
             options["g"] = str(gop)

@@ -1,0 +1,11 @@
+"""Tasks and their scripted experts by short name: the table scripts and tests iterate over."""
+
+from __future__ import annotations
+
+from rmb_lerobot.envs.experts.door import DoorExpert
+from rmb_lerobot.envs.experts.insert import InsertExpert
+from rmb_lerobot.envs.tasks.door import DoorTask
+from rmb_lerobot.envs.tasks.insert import InsertTask
+
+TASKS = {"insert": InsertTask, "door": DoorTask}
+EXPERTS = {"insert": InsertExpert, "door": DoorExpert}

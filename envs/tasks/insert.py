@@ -1,0 +1,95 @@
+"""RMB's MujocoUR5eInsert: put a square peg, held in the gripper, into a square hole.
+
+As in RMB the peg starts in the hand, held by a weld to the gripper (so the task is about
+placing, not grasping, and the gripper command does not matter), with contacts between the
+peg and the robot excluded. The hole (5 cm opening, 4 cm deep, for a 3 cm peg) sits on the
+table and moves in y from -0.06 to +0.09 m across the six worlds. Success: the peg's centre is
+within 0.012 m of the hole's axis in xy, its lower end is at most 0.01 m above the hole's floor
+(inserted at least 3 cm) and its axis is within 10 degrees of vertical.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from rmb_lerobot.envs.mujoco.robot import RobotSpec
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.base import Task
+
+PEG = "peg"
+HOLE = "hole"
+PEG_HALF_WIDTH = 0.015
+PEG_HALF_LENGTH = 0.04
+HOLE_DEPTH = 0.04
+HOLE_OPENING_HALF_WIDTH = 0.025
+# Peg centre along the gripper's base-mount z axis (RMB welds it 0.17 m from the flange).
+PEG_OFFSET_FROM_MOUNT = 0.163
+
+
+class InsertTask(Task):
+    rmb_env_name = "MujocoUR5eInsert"
+    description = "Insert the square peg into the hole."
+    world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
+    max_episode_steps = 300
+    hole_nominal_pos = np.array([-0.08, -0.08, TABLE_TOP_Z])
+    xy_tolerance = 0.012
+    depth_tolerance = 0.01
+    max_tilt_deg = 10.0
+
+    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+        peg = spec.worldbody.add_body(name=PEG, pos=[0.0, 0.0, 1.0])
+        peg.add_freejoint(name=PEG)
+        half = [PEG_HALF_WIDTH, PEG_HALF_WIDTH, PEG_HALF_LENGTH / 2]
+        for z, rgba in (
+            (PEG_HALF_LENGTH / 2, (0.8, 0.1, 0.5, 1)),
+            (-PEG_HALF_LENGTH / 2, (0.8, 0.5, 0.1, 1)),
+        ):
+            peg.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, z], rgba=rgba)
+        hole = spec.worldbody.add_body(name=HOLE, pos=list(self.hole_nominal_pos))
+        # Four walls around a square opening, as in RMB's env_ur5e_insert.xml.
+        walls = (
+            ((0.02, 0.045), (0.045, -0.02)),
+            ((0.02, 0.045), (-0.045, 0.02)),
+            ((0.045, 0.02), (0.02, 0.045)),
+            ((0.045, 0.02), (-0.02, -0.045)),
+        )
+        for i, ((sx, sy), (px, py)) in enumerate(walls):
+            hole.add_geom(
+                name=f"{HOLE}{i + 1}",
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=[sx, sy, HOLE_DEPTH / 2],
+                pos=[px, py, HOLE_DEPTH / 2],
+                rgba=[0.1, 0.8, 0.5, 1.0],
+            )
+        spec.add_equality(
+            name=PEG,
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=robot.ft_body,
+            name2=PEG,
+            data=[0, 0, 0, 0, 0, PEG_OFFSET_FROM_MOUNT, 1, 0, 0, 0, 1, 0],
+        )
+        for body in spec.body(robot.arm_base_body).find_all(mujoco.mjtObj.mjOBJ_BODY):
+            spec.add_exclude(bodyname1=body.name, bodyname2=PEG)
+
+    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
+        model.body(HOLE).pos = self.hole_nominal_pos + offset
+
+    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+        mount = data.body(robot.ft_body)
+        mat = mount.xmat.reshape(3, 3)
+        qpos = data.joint(PEG).qpos
+        qpos[:3] = mount.xpos + mat[:, 2] * PEG_OFFSET_FROM_MOUNT
+        qpos[3:] = mount.xquat
+        data.joint(PEG).qvel[:] = 0.0
+
+    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+        peg = data.body(PEG)
+        hole_pos = data.body(HOLE).xpos
+        axis = peg.xmat.reshape(3, 3)[:, 2]
+        centre = peg.xpos
+        xy_ok = np.linalg.norm(centre[:2] - hole_pos[:2]) <= self.xy_tolerance
+        lower_end_z = centre[2] - PEG_HALF_LENGTH * abs(axis[2])
+        depth_ok = lower_end_z <= hole_pos[2] + self.depth_tolerance
+        tilt_ok = abs(axis[2]) >= np.cos(np.deg2rad(self.max_tilt_deg))
+        return bool(xy_ok and depth_ok and tilt_ok)
