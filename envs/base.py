@@ -202,9 +202,10 @@ class RmbEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start an episode. ``options``: ``world_idx`` (0..5; default drawn from the env's
-        generator) and ``random_shift`` (metres; default the constructor's)."""
+        generator) and ``random_shift`` (metres; default the constructor's). Options LeRobot's
+        rollout loop adds (``lerobot_*``, e.g. ``lerobot_new_rollout``) are ignored."""
         super().reset(seed=seed)
-        options = dict(options or {})
+        options = {k: v for k, v in (options or {}).items() if not k.startswith("lerobot_")}
         unknown = set(options) - {"world_idx", "random_shift"}
         if unknown:
             raise ValueError(

@@ -7,7 +7,9 @@ The public entry points for RMB episodes are available here::
         ep["front_rgb_image"][0]
 
 They are imported lazily, so ``import rmb_lerobot`` (which LeRobot's plugin discovery does on
-every CLI start) stays cheap until episode I/O is actually used.
+every CLI start) stays cheap until episode I/O is actually used. Importing the package registers
+the RMB environments with gymnasium (``gymnasium.make("rmb_lerobot/MujocoUR5eInsert-v0")``);
+MuJoCo itself is only imported when an env is made.
 """
 
 from __future__ import annotations
@@ -48,6 +50,15 @@ if TYPE_CHECKING:  # what static type checkers and IDEs see
         switch_format,
     )
     from rmb_lerobot.errors import MissingKeyError, RmbFormatError
+
+
+def _register_gym_envs() -> None:
+    from rmb_lerobot.envs.registry import register_gym_envs
+
+    register_gym_envs()
+
+
+_register_gym_envs()
 
 
 def __getattr__(name: str):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib
 
 # Modules whose import registers LeRobot env types (``--env.type=rmb_...``).
-ENV_CONFIG_MODULES: tuple[str, ...] = ()
+ENV_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.envs.lerobot_config",)
 # Modules whose import registers LeRobot policy types (``--policy.type=...``).
 POLICY_CONFIG_MODULES: tuple[str, ...] = ()
 

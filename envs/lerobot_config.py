@@ -1,0 +1,118 @@
+"""LeRobot env types for every RMB environment, generated from the one table.
+
+``lerobot-train --env.type=rmb_ur5e_insert ...`` and ``lerobot-eval --env.type=...`` find these
+because importing ``lerobot_env_rmb`` (which LeRobot's plugin discovery does) imports this
+module. Each type is a small dataclass: cameras, image size, action mode and episode length
+are fields, ``features``/``features_map`` follow from them.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field, make_dataclass
+
+import gymnasium as gym
+from lerobot.configs import FeatureType, PolicyFeature
+from lerobot.envs.configs import EnvConfig
+
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
+from rmb_lerobot.pose import POSE_DIM, REL_POSE_DIM
+
+# RMB's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).
+RMB_FPS = 31
+DEFAULT_CAMERAS = ("front", "hand")  # RMB's default policy cameras for the UR5e tasks
+
+
+def action_dim(action_mode: str, layout: K.RobotLayout = K.UR5E_LAYOUT) -> int:
+    """Numbers in one action of the given mode (see ``RmbEnv``'s action modes)."""
+    dims = {
+        "joint": layout.num_joints,
+        "eef_abs": POSE_DIM * layout.num_eefs + layout.num_grippers,
+        "eef_rel": REL_POSE_DIM * layout.num_eefs + layout.num_grippers,
+    }
+    if action_mode not in dims:
+        raise ValueError(f"action_mode must be one of {sorted(dims)}, got {action_mode!r}")
+    return dims[action_mode]
+
+
+@dataclass
+class RmbEnvConfig(EnvConfig):
+    """Fields shared by every RMB env type (the registered subclasses only set ``task``)."""
+
+    task: str | None = None  # RMB env name, e.g. "MujocoUR5eInsert"
+    fps: int = RMB_FPS
+    episode_length: int | None = None  # None: the task's own limit
+    cameras: list[str] = field(default_factory=lambda: list(DEFAULT_CAMERAS))
+    image_width: int = 128
+    image_height: int = 128
+    action_mode: str = "joint"
+    random_shift: float = 0.0  # metres of uniform object shift on top of the world's offset
+    render_mode: str = "rgb_array"
+
+    def __post_init__(self) -> None:
+        layout = K.UR5E_LAYOUT
+        shape = (self.image_height, self.image_width, 3)
+        self.features = {
+            N.ACTION_KEY: PolicyFeature(
+                FeatureType.ACTION, (action_dim(self.action_mode, layout),)
+            ),
+            N.ENV_STATE_KEY: PolicyFeature(FeatureType.STATE, (layout.num_joints,)),
+        }
+        self.features_map = {N.ACTION_KEY: N.ACTION_KEY, N.ENV_STATE_KEY: N.STATE}
+        for camera in self.cameras:
+            self.features[N.env_pixels_key(camera)] = PolicyFeature(FeatureType.VISUAL, shape)
+            self.features_map[N.env_pixels_key(camera)] = N.image_key(camera)
+
+    @property
+    def gym_kwargs(self) -> dict:
+        return {
+            "cameras": tuple(self.cameras),
+            "image_size": (self.image_width, self.image_height),
+            "action_mode": self.action_mode,
+            "random_shift": self.random_shift,
+            "render_mode": self.render_mode,
+            "render_camera": self.cameras[0] if self.cameras else "front",
+            "max_episode_steps": self.episode_length,
+        }
+
+    def create_envs(
+        self, n_envs: int, use_async_envs: bool = False
+    ) -> dict[str, dict[int, gym.vector.VectorEnv]]:
+        """Vector envs built straight from our table (no gym id lookup, no package import).
+
+        Async workers start with forkserver (what LeRobot uses); ``make_env`` is a module
+        function, so the env factory pickles by reference.
+        """
+        factory = functools.partial(make_env, self.task, **self.gym_kwargs)
+        if use_async_envs and n_envs > 1:
+            vec = gym.vector.AsyncVectorEnv(
+                [factory] * n_envs,
+                context="forkserver",
+                autoreset_mode=gym.vector.AutoresetMode.SAME_STEP,
+            )
+        else:
+            vec = gym.vector.SyncVectorEnv(
+                [factory] * n_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP
+            )
+        return {self.type: {0: vec}}
+
+
+def _register(entry: EnvEntry) -> type[RmbEnvConfig]:
+    name = "".join(part.capitalize() for part in entry.lerobot_type.split("_")) + "Env"
+    cls = make_dataclass(
+        name,
+        [("task", str | None, field(default=entry.rmb_env_name))],
+        bases=(RmbEnvConfig,),
+        namespace={"__doc__": f"LeRobot env type for RMB's {entry.rmb_env_name}."},
+    )
+    cls.__module__ = __name__
+    globals()[name] = cls  # importable by name, so configs pickle by reference
+    return EnvConfig.register_subclass(entry.lerobot_type)(cls)
+
+
+ENV_CONFIGS: dict[str, type[RmbEnvConfig]] = {
+    entry.lerobot_type: _register(entry) for entry in ENVS.values()
+}
+"""LeRobot env type name -> its config class."""

@@ -1,0 +1,89 @@
+"""``rmb-collect ENV --episodes N --out DIR``: scripted-expert demonstrations as RMB episodes."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from tqdm import tqdm
+
+from rmb_lerobot.codecs.depth import DEPTH_CODECS
+from rmb_lerobot.envs.registry import ENVS, entry_for
+from rmb_lerobot.errors import RmbFormatError
+
+ALL_CAMERAS = ("front", "left", "right", "hand")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    names = ", ".join(sorted(e.rmb_env_name for e in ENVS.values()))
+    parser = argparse.ArgumentParser(
+        prog="rmb-collect",
+        description=__doc__.splitlines()[0].split(": ", 1)[1],
+        epilog=f"environments: {names} (short names like 'insert' work too)",
+    )
+    parser.add_argument("env", help="environment, e.g. MujocoUR5eInsert or insert")
+    parser.add_argument("--episodes", type=int, required=True, help="episodes to record")
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+    parser.add_argument("--format", choices=["rmb", "hdf5"], default="rmb", dest="fmt")
+    parser.add_argument(
+        "--world-idx", type=int, nargs="+", default=list(range(6)), help="worlds to cycle through"
+    )
+    parser.add_argument("--cameras", nargs="*", default=list(ALL_CAMERAS), choices=ALL_CAMERAS)
+    parser.add_argument("--image-size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
+    parser.add_argument("--no-depth", action="store_true", help="record RGB only")
+    parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
+    parser.add_argument(
+        "--success-only", action="store_true", help="keep only successful episodes (retrying)"
+    )
+    parser.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--depth-codec", default="rmb-videoio", choices=sorted(DEPTH_CODECS))
+    parser.add_argument("--overwrite", action="store_true", help="replace existing episodes")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    args = build_parser().parse_args(argv)
+    from rmb_lerobot.envs.collect import CollectConfig, collect
+
+    try:
+        entry_for(args.env)
+        if args.episodes < 1 or args.workers < 1:
+            raise ValueError("--episodes and --workers must be >= 1")
+        if any(not 0 <= w < 6 for w in args.world_idx):
+            raise ValueError(f"--world-idx values must be in 0..5, got {args.world_idx}")
+        config = CollectConfig(
+            env=args.env,
+            out=args.out,
+            episodes=args.episodes,
+            fmt=args.fmt,
+            world_idx=tuple(args.world_idx),
+            cameras=tuple(args.cameras),
+            image_size=(args.image_size[0], args.image_size[1]),
+            depth=not args.no_depth,
+            random_shift=args.random_shift,
+            success_only=args.success_only,
+            seed=args.seed,
+            depth_codec=args.depth_codec,
+            overwrite=args.overwrite,
+        )
+        kept = successes = 0
+        with tqdm(total=args.episodes, desc=f"collect {args.env}", unit="episode") as bar:
+            for result in collect(config, workers=args.workers):
+                kept += result.path is not None
+                successes += result.success
+                bar.set_postfix(success=f"{successes}/{bar.n + 1}")
+                bar.update()
+    except (ValueError, RmbFormatError) as exc:
+        print(f"rmb-collect: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"kept {kept} episodes ({successes} successful of {args.episodes}) in {args.out}")
+    return 0 if kept == args.episodes else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,77 @@
+"""rmb-collect: scripted demonstrations recorded as complete RMB episodes."""
+
+import numpy as np
+import pytest
+
+from rmb_lerobot import find_episodes, open_episode
+from rmb_lerobot import keys as K
+from rmb_lerobot.cli.collect import main
+from rmb_lerobot.envs.collect import CollectConfig, collect
+
+SMALL = ["--cameras", "front", "hand", "--image-size", "48", "32"]
+
+
+def test_collected_episodes_carry_everything_rmb_records(tmp_path, capsys):
+    out = tmp_path / "demos"
+    code = main(
+        ["MujocoUR5eInsert", "--episodes", "2", "--out", str(out), "--world-idx", "1", "4", *SMALL]
+    )
+    assert code == 0, capsys.readouterr().err
+    paths = find_episodes(out)
+    assert [p.name for p in paths] == [
+        "MujocoUR5eInsert_world1_000.rmb",
+        "MujocoUR5eInsert_world4_001.rmb",
+    ]
+    with open_episode(paths[1]) as ep:
+        assert ep.attrs["world_idx"] == 4 and ep.attrs["env"] == "MujocoUR5eInsertEnv"
+        assert ep.attrs["task_desc"].startswith("Insert") and ep.attrs["demo_name"] == paths[1].stem
+        assert ep.camera_names == ["front", "hand"] and ep.fovy("hand") > 0
+        assert ep["reward"][-1] == 1.0  # the expert succeeded
+        for key in (
+            K.MEASURED_EEF_POSE,
+            K.COMMAND_EEF_POSE_REL,
+            K.MEASURED_EEF_WRENCH,
+            K.COMMAND_JOINT_VEL,
+        ):
+            assert key in ep
+        assert ep["front_rgb_image"][0].shape == (32, 48, 3)
+        depth = ep["hand_depth_image"][3]
+        assert depth.dtype == np.float32 and 0 < np.median(depth) < 3
+        assert ep.fps == pytest.approx(31.25)
+    assert "kept 2 episodes (2 successful of 2)" in capsys.readouterr().out
+
+
+def test_parallel_workers_and_single_file_format(tmp_path):
+    config = CollectConfig("door", tmp_path, episodes=2, fmt="hdf5", cameras=(), depth=False)
+    results = sorted(collect(config, workers=2), key=lambda r: r.index)
+    assert [r.success for r in results] == [True, True]
+    assert [p.name for p in find_episodes(tmp_path)] == [
+        "MujocoUR5eDoor_world0_000.hdf5",
+        "MujocoUR5eDoor_world1_001.hdf5",
+    ]
+
+
+def test_an_interrupted_collection_leaves_only_complete_episodes(tmp_path, monkeypatch):
+    from rmb_lerobot.envs.experts.insert import InsertExpert
+
+    calls = {"n": 0}
+    original = InsertExpert.__call__
+
+    def flaky(self, obs):
+        calls["n"] += 1
+        if calls["n"] == 70:  # in the middle of the second episode
+            raise KeyboardInterrupt
+        return original(self, obs)
+
+    monkeypatch.setattr(InsertExpert, "__call__", flaky)
+    config = CollectConfig("insert", tmp_path, episodes=3, cameras=("front",), image_size=(32, 32))
+    with pytest.raises(KeyboardInterrupt):
+        list(collect(config))
+    assert [p.name for p in tmp_path.iterdir()] == ["MujocoUR5eInsert_world0_000.rmb"]
+
+
+def test_bad_arguments_are_reported(tmp_path, capsys):
+    assert main(["MujocoUR5eFly", "--episodes", "1", "--out", str(tmp_path)]) == 2
+    assert "unknown RMB environment 'MujocoUR5eFly'" in capsys.readouterr().err
+    assert main(["insert", "--episodes", "1", "--out", str(tmp_path), "--world-idx", "7"]) == 2
+    assert "--world-idx values must be in 0..5" in capsys.readouterr().err
