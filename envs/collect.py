@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rmb_lerobot.envs.registry import entry_for
+
 from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter
 
 NUM_WORLDS = 6

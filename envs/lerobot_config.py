@@ -14,10 +14,10 @@ from dataclasses import dataclass, field, make_dataclass
 import gymnasium as gym
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
+from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
-from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
 from rmb_lerobot.pose import POSE_DIM, REL_POSE_DIM
 
 # RMB's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).

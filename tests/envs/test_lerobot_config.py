@@ -7,10 +7,10 @@ import sys
 import numpy as np
 import pytest
 from lerobot.envs.configs import EnvConfig
-
-import lerobot_env_rmb  # noqa: F401 - what LeRobot's plugin discovery imports
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS, action_dim
 from rmb_lerobot.envs.registry import ENVS
+
+import lerobot_env_rmb  # noqa: F401 - what LeRobot's plugin discovery imports
 from rmb_lerobot.registration import registered_env_types
 
 
@@ -52,7 +52,7 @@ def test_sync_vector_env_matches_the_features():
         assert obs["agent_pos"].shape == (2, 7) and obs["agent_pos"].dtype == np.float32
         _, _, _, _, info = vec.step(np.tile(obs["agent_pos"][:1], (2, 1)))
         assert "is_success" in info
-        assert list(vec.call("task_description"))[0].startswith("Insert")
+        assert next(iter(vec.call("task_description"))).startswith("Insert")
     finally:
         vec.close()
 

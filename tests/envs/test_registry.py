@@ -2,10 +2,10 @@
 
 import gymnasium as gym
 import pytest
-
-import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 from rmb_lerobot.envs.registry import ENVS, entry_for
+
+import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
 
 
 def test_names_follow_rmb_and_the_issue():
@@ -31,7 +31,7 @@ def test_table_covers_every_task_in_the_catalog():
 
 def test_unknown_env_names_list_the_known_ones():
     with pytest.raises(
-        ValueError, match="unknown RMB environment 'MujocoUR5eFly'.*MujocoUR5eInsert"
+        ValueError, match=r"unknown RMB environment 'MujocoUR5eFly'.*MujocoUR5eInsert"
     ):
         entry_for("MujocoUR5eFly")
 
