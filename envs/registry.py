@@ -70,6 +70,7 @@ ENVS: dict[str, EnvEntry] = {
     for entry in (
         _entry("door", "DoorTask", "DoorExpert"),
         _entry("insert", "InsertTask", "InsertExpert"),
+        _entry("toolbox", "ToolboxTask", "ToolboxExpert"),
     )
 }
 """Every environment by short task name: the source of truth for all env names."""

@@ -6,6 +6,8 @@ bar 11.2-12.8 cm above the bottom, 3.2 cm over the lid: fits the Robotiq 2F-85's
 opening and leaves room for its fingers). The toolbox stands at (0, -0.2) turned by 90 degrees
 (bar along world x); the mat (16 cm yellow square on a 24 cm purple one, 3 mm thick) lies at
 (0, +0.2). As in RMB only the toolbox moves: in y from -0.06 to +0.09 m across the six worlds.
+The random shift is applied in x and y only (RMB also shifts the start height, which drops the
+box onto the table or starts it inside it).
 
 Success is RMB's ``_get_reward`` (pick-and-place, not just picking): the toolbox origin is
 within 0.03 m of the mat's origin in x and in y and less than 0.005 m above it, i.e. the box
@@ -28,18 +30,17 @@ HANDLE_POST_Y = 0.03  # posts at +-y in the toolbox frame
 HANDLE_HEIGHT = 0.12  # bar axis above the toolbox origin (its bottom face)
 HANDLE_HALF_WIDTH = 0.008  # bar half-size across its axis (16 mm square section)
 HANDLE_HALF_LENGTH = 0.04
+# Mat layers: (half side, centre height above the mat origin, colour), each 2 mm thick.
 MAT_LAYERS = ((0.08, 0.002, (0.8, 0.8, 0.1, 1.0)), (0.12, 0.001, (0.6, 0.0, 0.4, 1.0)))
 MAT_HALF_THICKNESS = 0.001
 MAT_TOP = 0.003  # top of the upper layer above the mat origin
-# A real toolbox is hollow: 0.5 kg instead of the 1.2 kg a solid box of water would weigh.
-TOOLBOX_MASS = 0.5
 
 
 class ToolboxTask(Task):
     rmb_env_name = "MujocoUR5eToolbox"
     description = "Grasp the handle of the toolbox and move it onto the mat."
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
-    max_episode_steps = 500
+    max_episode_steps = 400
     # RMB's MujocoUR5eToolboxEnv start pose: the Insert pose with the wrist turned by pi / 2.
     home_arm_qpos = (np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi)
     toolbox_nominal_pos = np.array([0.0, -0.2, TABLE_TOP_Z])
@@ -56,9 +57,8 @@ class ToolboxTask(Task):
         toolbox.add_freejoint(name=TOOLBOX)
         grey = [0.4, 0.4, 0.5, 1.0]
         hx, hy, hz = BOX_HALF_SIZE
-        volume = 8 * hx * hy * hz
-        density = TOOLBOX_MASS / volume  # the handle adds about 5 %
-        toolbox.add_geom(type=box, size=[hx, hy, hz], pos=[0, 0, hz], rgba=grey, density=density)
+        # MuJoCo's default density (1000 kg/m^3), as in RMB: the toolbox weighs 1.18 kg.
+        toolbox.add_geom(type=box, size=[hx, hy, hz], pos=[0, 0, hz], rgba=grey)
         post_half_height = 0.5 * (HANDLE_HEIGHT - 2 * hz)
         for y in (-HANDLE_POST_Y, HANDLE_POST_Y):
             toolbox.add_geom(
@@ -66,7 +66,6 @@ class ToolboxTask(Task):
                 size=[HANDLE_HALF_WIDTH, 0.005, post_half_height],
                 pos=[0, y, 2 * hz + post_half_height],
                 rgba=grey,
-                density=density,
             )
         toolbox.add_geom(
             name=HANDLE,
@@ -74,14 +73,12 @@ class ToolboxTask(Task):
             size=[HANDLE_HALF_WIDTH, HANDLE_HALF_LENGTH, HANDLE_HALF_WIDTH],
             pos=[0, 0, HANDLE_HEIGHT],
             rgba=grey,
-            density=density,
         )
         mat = spec.worldbody.add_body(name=MAT, pos=list(self.mat_pos))
-        for half, z, rgba in (
-            (MAT_LAYERS[0][0], MAT_TOP - MAT_HALF_THICKNESS, MAT_LAYERS[0][2]),
-            (MAT_LAYERS[1][0], MAT_HALF_THICKNESS, MAT_LAYERS[1][2]),
-        ):
-            mat.add_geom(type=box, size=[half, half, MAT_HALF_THICKNESS], pos=[0, 0, z], rgba=rgba)
+        for half, z, rgba in MAT_LAYERS:
+            mat.add_geom(
+                type=box, size=[half, half, MAT_HALF_THICKNESS], pos=[0, 0, z], rgba=list(rgba)
+            )
 
     def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
         model.body(TOOLBOX).pos = self.toolbox_nominal_pos + offset

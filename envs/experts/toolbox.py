@@ -1,0 +1,157 @@
+"""Scripted expert for the Toolbox task: grasp the handle from above, carry the box, set it down.
+
+The gripper points down with its fingers closing across the handle bar (horizontal,
+perpendicular to the bar), descends until the pinch point is on the bar's axis, closes, lifts
+the box clear of the table, carries it over the mat and lowers it until it rests there, then
+lets go and backs off upwards. While carrying, the targets are placed so that the *box* (not
+the hand) ends up centred on the mat: the measured offset between the pinch point and the
+toolbox origin is added to the mat's position, which absorbs any slip or swing of the box in
+the grasp. The lowering target is frozen once the box hangs still over the mat, so the hand
+does not chase the box when it touches down; the last centimetres to the bar and to the mat
+are covered slowly, which keeps the integral correction from overshooting the grasp height.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import numpy as np
+from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
+from rmb_lerobot.envs.tasks.toolbox import HANDLE, MAT, MAT_TOP, TOOLBOX
+from scipy.spatial.transform import Rotation
+
+
+class Phase(Enum):
+    ABOVE = "above"
+    DESCEND = "descend"
+    CLOSE = "close"
+    LIFT = "lift"
+    CARRY = "carry"
+    LOWER = "lower"
+    RELEASE = "release"
+    RETREAT = "retreat"
+
+
+class ToolboxExpert(ScriptedExpert):
+    """Tool point: the gripper's pinch point."""
+
+    approach_height = 0.08  # pre-grasp height of the pinch point above the bar (m)
+    grasp_depth = 0.0  # pinch point below the bar's axis when closing (m)
+    carry_clearance = 0.06  # toolbox bottom above the mat top while carrying (m)
+    place_height = 0.0005  # toolbox bottom above the mat top at the end of lowering (m)
+    open_gripper, closed_gripper = 0.0, 255.0
+    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
+    settle_tol = 0.5  # gripper value change per step that counts as settled
+    still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
+    # The last ``slow_zone`` of the descent to the bar and of the lowering onto the mat is
+    # done slowly, so the hand arrives at rest (no overshoot) and sets the box down softly.
+    slow_zone = 0.03
+    grasp_speed, place_speed = 0.05, 0.03  # m/s
+
+    def on_reset(self) -> None:
+        self.phase = Phase.ABOVE
+        self._count = 0
+        self._last_gripper = 0.0
+        self._grasp = np.zeros(3)  # pinch target while closing
+        self._place = np.zeros(3)  # pinch target while lowering onto the mat
+        self._release = np.zeros(3)  # pinch target while opening
+        site = self.env.data.site(self.env.robot.tcp_site)
+        eef_pos, eef_rot = self.eef_world()
+        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        self._rot = self._grasp_rotation(eef_rot)
+        self._last_tool = site.xpos.copy()
+        self._tool_speed = 0.0
+
+    def _grasp_rotation(self, current: Rotation) -> Rotation:
+        """Gripper down, fingers (the eef x axis) across the bar; of the two such orientations
+        the one nearer the current hand."""
+        bar_axis = self.env.data.geom(HANDLE).xmat.reshape(3, 3)[:, 1]
+        across = np.cross([0.0, 0.0, 1.0], bar_axis)
+        across /= np.linalg.norm(across)
+        if across @ current.apply([1.0, 0.0, 0.0]) < 0:
+            across = -across
+        down = np.array([0.0, 0.0, -1.0])
+        return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+
+    def tool_offset(self) -> np.ndarray:
+        return self._offset
+
+    def measured_tool(self) -> np.ndarray:
+        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+
+    # ------------------------------------------------------------------ helpers
+    def _gripper_settled(self) -> bool:
+        self._count += 1
+        gripper = self.env.measured_joint_pos()[-1]
+        settled = abs(gripper - self._last_gripper) < self.settle_tol
+        self._last_gripper = gripper
+        return self._count >= self.min_gripper_steps and settled
+
+    def _arrived(self, target: np.ndarray, tol: float) -> bool:
+        """Reference and hand at ``target`` and the hand at rest."""
+        return self.reached(target, tol) and self._tool_speed < self.still_speed
+
+    def _slowly(self, target: np.ndarray, speed: float) -> np.ndarray:
+        """``target``, but approached at ``speed`` once the reference is within the slow zone."""
+        delta = target - self._ref_pos
+        dist = np.linalg.norm(delta)
+        step = speed * self.dt
+        if dist > self.slow_zone or dist <= step:
+            return target
+        return self._ref_pos + delta * (step / dist)
+
+    def _over_mat(self, bottom_above_mat_top: float) -> np.ndarray:
+        """Pinch target that puts the toolbox origin over the mat centre at the given height."""
+        data = self.env.data
+        held = self.measured_tool() - data.body(TOOLBOX).xpos
+        mat = data.body(MAT).xpos
+        return mat + held + np.array([0.0, 0.0, MAT_TOP + bottom_above_mat_top])
+
+    def _box_over_mat(self, tol: float) -> bool:
+        data = self.env.data
+        return bool(np.max(np.abs(data.body(TOOLBOX).xpos[:2] - data.body(MAT).xpos[:2])) < tol)
+
+    # ------------------------------------------------------------------ phases
+    def waypoint(self) -> Waypoint:
+        tool = self.measured_tool()
+        self._tool_speed = float(np.linalg.norm(tool - self._last_tool)) / self.dt
+        self._last_tool = tool
+        grasp = self.env.data.geom(HANDLE).xpos - np.array([0.0, 0.0, self.grasp_depth])
+        if self.phase is Phase.ABOVE:
+            target = grasp + np.array([0.0, 0.0, self.approach_height])
+            if self.reached(target, 0.01):
+                self.phase = Phase.DESCEND
+            return Waypoint(target, self._rot, self.open_gripper)
+        if self.phase is Phase.DESCEND:
+            if self._arrived(grasp, 0.003):
+                self.phase = Phase.CLOSE
+                self._grasp = grasp.copy()
+            return Waypoint(self._slowly(grasp, self.grasp_speed), self._rot, self.open_gripper)
+        if self.phase is Phase.CLOSE:
+            if self._gripper_settled():
+                self.phase = Phase.LIFT
+            return Waypoint(self._grasp, self._rot, self.closed_gripper)
+        if self.phase is Phase.LIFT:
+            target = np.array([*self._grasp[:2], self._over_mat(self.carry_clearance)[2]])
+            if self.reached(target, 0.01):
+                self.phase = Phase.CARRY
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.CARRY:
+            target = self._over_mat(self.carry_clearance)
+            if self._arrived(target, 0.01) and self._box_over_mat(0.005):
+                self.phase = Phase.LOWER
+                self._place = self._over_mat(self.place_height)
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.LOWER:
+            if self.env.task.is_success(self.env.model, self.env.data):
+                self.phase = Phase.RELEASE
+                self._count = 0
+                self._release = self._ref_pos.copy()
+            target = self._slowly(self._place, self.place_speed)
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.RELEASE:
+            if self._gripper_settled():
+                self.phase = Phase.RETREAT
+            return Waypoint(self._release, self._rot, self.open_gripper)
+        target = self._release + np.array([0.0, 0.0, self.approach_height])
+        return Waypoint(target, self._rot, self.open_gripper)
