@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from rmb_lerobot.envs.experts.door import DoorExpert
 from rmb_lerobot.envs.experts.insert import InsertExpert
+from rmb_lerobot.envs.experts.toolbox import ToolboxExpert
 from rmb_lerobot.envs.tasks.door import DoorTask
 from rmb_lerobot.envs.tasks.insert import InsertTask
+from rmb_lerobot.envs.tasks.toolbox import ToolboxTask
 
-TASKS = {"insert": InsertTask, "door": DoorTask}
-EXPERTS = {"insert": InsertExpert, "door": DoorExpert}
+TASKS = {"insert": InsertTask, "door": DoorTask, "toolbox": ToolboxTask}
+EXPERTS = {"insert": InsertExpert, "door": DoorExpert, "toolbox": ToolboxExpert}
