@@ -1,9 +1,9 @@
 """``rmb-quickstart``: the main job of the README, end to end on this machine.
 
-Today it records a synthetic UR5e episode in both RMB variants (streaming writer, derived eef
-poses and ``_rel`` keys), reads both back by random access, checks them against each other and
-against ``switch-format``, and prints a summary. (The simulated environments, the LeRobot
-conversion, training and evaluation join this pipeline as they land.)
+It collects scripted-expert demonstrations in an RMB simulation env (``rmb-collect``), reads
+the episodes back by random access, switches one to the single-file variant and checks both
+against each other, and prints a summary. (Conversion to LeRobotDataset, training and
+evaluation join this pipeline as they land.)
 """
 
 from __future__ import annotations
@@ -19,9 +19,7 @@ import numpy as np
 from tqdm import tqdm
 
 from rmb_lerobot import keys as K
-from rmb_lerobot.episode import EpisodeWriter, open_episode, switch_format
-from rmb_lerobot.kinematics import UR5E
-from rmb_lerobot.synthetic import ur5e_attrs, ur5e_steps
+from rmb_lerobot.episode import open_episode, switch_format
 
 
 def _size_mb(path: Path) -> float:
@@ -34,13 +32,18 @@ def _psnr(a: np.ndarray, b: np.ndarray) -> float:
     return float("inf") if mse == 0 else 10 * np.log10(255**2 / mse)
 
 
-def record(path: Path, steps: int, cameras: tuple[str, ...], size: tuple[int, int]) -> float:
-    """Write one synthetic episode; returns the seconds it took."""
-    start = time.perf_counter()
-    with EpisodeWriter(path, ur5e_attrs(cameras), fk=UR5E, overwrite=True) as writer:
-        for step in tqdm(ur5e_steps(steps, cameras, size), total=steps, desc=f"record {path.name}"):
-            writer.append(step)
-    return time.perf_counter() - start
+def collect_demos(env: str, out: Path, episodes: int, cameras, size, workers: int) -> list[Path]:
+    """Record scripted demonstrations (the ``rmb-collect`` pipeline); returns episode paths."""
+    from rmb_lerobot.envs.collect import CollectConfig, collect
+
+    config = CollectConfig(env, out, episodes, cameras=tuple(cameras), image_size=tuple(size))
+    paths, successes = [], 0
+    for result in tqdm(collect(config, workers), total=episodes, desc=f"collect {env}"):
+        successes += result.success
+        if result.path is not None:
+            paths.append(result.path)
+    print(f"collected {len(paths)} episodes of {env}, {successes} successful")
+    return sorted(paths)
 
 
 def summarize(path: Path) -> list[str]:
@@ -88,29 +91,30 @@ def random_access_ms(path: Path, key: str, reads: int = 10) -> float:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rmb-quickstart", description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("outputs/quickstart"))
-    parser.add_argument("--steps", type=int, default=150)
+    parser.add_argument("--env", default="MujocoUR5eInsert")
+    parser.add_argument("--episodes", type=int, default=4)
+    parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
-    parser.add_argument("--image-size", nargs=2, type=int, default=[640, 480], metavar=("W", "H"))
+    parser.add_argument("--image-size", nargs=2, type=int, default=[128, 128], metavar=("W", "H"))
     args = parser.parse_args(argv)
 
     out: Path = args.out
     if out.exists():
         shutil.rmtree(out)
-    out.mkdir(parents=True)
-    cameras, size = tuple(args.cameras), tuple(args.image_size)
-
-    compact, single = out / "synthetic_ur5e.rmb", out / "synthetic_ur5e.hdf5"
-    report = []
-    for path in (compact, single):
-        seconds = record(path, args.steps, cameras, size)
-        report.append(f"recorded {path.name}: {args.steps} steps in {seconds:.1f} s")
-    switched = switch_format(compact, out / "switched_from_rmb.hdf5")
-    report += summarize(compact) + summarize(single)
-    report += compare(single, compact) + compare(compact, switched)
-    key = K.depth_image_key(cameras[0])
-    report.append(f"random-access read of one {key} frame: {random_access_ms(compact, key):.1f} ms")
+    start = time.perf_counter()
+    episodes = collect_demos(
+        args.env, out / "rmb", args.episodes, args.cameras, args.image_size, args.workers
+    )
+    if not episodes:
+        print("no episodes were collected", file=sys.stderr)
+        return 1
+    first = episodes[0]
+    switched = switch_format(first, out / "switched" / f"{first.stem}.hdf5")
+    report = summarize(first) + compare(first, switched)
+    key = K.depth_image_key(args.cameras[0])
+    report.append(f"random-access read of one {key} frame: {random_access_ms(first, key):.1f} ms")
     print("\n".join(report))
-    print(f"\nOK: episodes in {out.resolve()}")
+    print(f"\nOK in {time.perf_counter() - start:.0f} s: episodes in {(out / 'rmb').resolve()}")
     return 0
 
 
