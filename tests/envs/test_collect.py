@@ -75,3 +75,13 @@ def test_bad_arguments_are_reported(tmp_path, capsys):
     assert "unknown RMB environment 'MujocoUR5eFly'" in capsys.readouterr().err
     assert main(["insert", "--episodes", "1", "--out", str(tmp_path), "--world-idx", "7"]) == 2
     assert "--world-idx values must be in 0..5" in capsys.readouterr().err
+
+
+def test_collected_episodes_read_with_the_original_rmb_loader(tmp_path, read_like_original):
+    config = CollectConfig("insert", tmp_path, episodes=1, cameras=("front",), image_size=(32, 24))
+    (result,) = collect(config)
+    data, attrs = read_like_original(result.path)
+    assert attrs["env"] == "MujocoUR5eInsertEnv" and attrs["format"] == "RmbData-Compact"
+    assert data["front_rgb_image"].shape == (result.steps, 24, 32, 3)
+    assert data["front_depth_image"].shape == (result.steps, 24, 32)
+    assert data["measured_eef_pose_rel"].shape == (result.steps, 6)
