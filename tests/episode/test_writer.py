@@ -173,3 +173,13 @@ def test_depth_beyond_the_uint16_range_is_stored_as_no_data(tmp_path, steps, att
         stored = ep["front_depth_image"][0]
         np.testing.assert_array_equal(stored[0, :4], 0)
         np.testing.assert_allclose(stored[1:], depth[1:], atol=0.0005 + 1e-6)  # rounded to mm
+
+
+def test_smaller_depth_codec_is_opt_in_and_keeps_millimetres_within_1mm(tmp_path, record, steps):
+    path = record(tmp_path / "demo.rmb", depth_codec="rmbz")
+    assert (path / "front_depth_image.rmbz").exists()
+    assert not (path / "front_depth_image.rmb.mp4").exists()
+    with open_episode(path) as ep:
+        truth_mm = np.rint(np.stack([s["front_depth_image"] for s in steps]) * 1000)
+        # rmbz keeps every millimetre value within 1 mm (float metres were rounded to mm first).
+        assert np.abs(ep["front_depth_image"][:] * 1000 - truth_mm).max() <= 1 + 1e-3
