@@ -271,7 +271,7 @@ class Episode:
     def _open_video(self, key: str):
         path = self._video_keys[key]
         if K.is_rgb_image_key(key):
-            return RgbVideoReader(path)
+            return RgbVideoReader(path, image_size=self.image_size)
         hit = find_depth_file(self.path, key)
         if hit is None:  # pragma: no cover - scanned above
             raise MissingKeyError("depth video vanished", path=path, key=key)
@@ -287,7 +287,7 @@ class Episode:
                 key=key,
             )
         if K.is_rgb_image_key(key):
-            series = VideoSeries(reader, self._rgb_transform if self.image_size else None)
+            series = VideoSeries(reader)  # the reader resizes (image_size)
         else:
             series = VideoSeries(reader, self._depth_transform_mm)
         self._open_series.append(series)
