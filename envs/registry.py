@@ -68,6 +68,8 @@ def _entry(task: str, task_class: str, expert_class: str) -> EnvEntry:
 ENVS: dict[str, EnvEntry] = {
     entry.task: entry
     for entry in (
+        _entry("cabinet_hinge", "CabinetHingeTask", "CabinetHingeExpert"),
+        _entry("cabinet_slide", "CabinetSlideTask", "CabinetSlideExpert"),
         _entry("door", "DoorTask", "DoorExpert"),
         _entry("insert", "InsertTask", "InsertExpert"),
         _entry("toolbox", "ToolboxTask", "ToolboxExpert"),

@@ -1,0 +1,175 @@
+"""RMB's MujocoUR5eCabinet: a two-compartment cabinet with a hinged lid and a sliding door.
+
+Geometry follows RMB's ``objects/cabinet/cabinet_body.xml`` (20 x 30 cm footprint, cabinet
+frame x pointing away from the robot): the lower compartment (16 cm) is closed by a fixed panel
+and a 15 x 15 cm sliding door (joint ``slide``, along +y, range 0..0.15 m) with a vertical tab
+handle near its -y edge; the upper compartment (12 cm) has a lid hinged along its back top edge
+(joint ``hinge``, about +y, range 0..pi, the front edge rising for positive angles) and a
+10 x 4 cm notch in the top of its front wall, under the lid, where a finger gets under it.
+The tab stands out further and is thicker than RMB's (4 x 1 cm instead of 1.5 x 0.6 cm) so
+the Robotiq 2F-85's closed fingers can hook it with a margin. RMB's single env counts either
+joint; here each is its own task: :class:`CabinetHingeTask` (lid opened beyond 120 degrees)
+and :class:`CabinetSlideTask` (door slid beyond 0.12 m). The cabinet moves in y from -0.06 to
++0.09 m across the six worlds, as in RMB.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import mujoco
+import numpy as np
+from rmb_lerobot.envs.mujoco.robot import RobotSpec
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.base import Task
+
+CABINET = "cabinet"  # the static body
+LID = "cabinet_lid"
+SLIDE_DOOR = "cabinet_slide_door"
+HINGE = "hinge"
+SLIDE = "slide"
+HANDLE = "cabinet_handle"
+# Cabinet-frame geometry (m) the experts use.
+HALF_DEPTH = 0.1  # front faces at x = -HALF_DEPTH
+HINGE_POS = np.array([0.095, 0.0, 0.28])  # lid hinge axis (along y)
+LID_THICKNESS = 0.01
+NOTCH_HALF_WIDTH = 0.05
+NOTCH_Z = (0.24, 0.28)
+SLIDE_POS = np.array([-0.095, 0.0, 0.0])  # slide-door body origin
+SLIDE_RANGE = (0.0, 0.15)
+DOOR_HALF_THICKNESS = 0.005
+HANDLE_DEPTH = 0.04  # how far the tab stands out of the door's front face
+HANDLE_HALF_THICKNESS = 0.005
+HANDLE_HALF_HEIGHT = 0.03
+HANDLE_POS = np.array([-DOOR_HALF_THICKNESS - HANDLE_DEPTH / 2, -0.135, 0.085])  # slide frame
+
+_COLOURS = {
+    "base": (0.5, 0.5, 0.5, 1.0),
+    "lower": (0.9, 0.6, 0.1, 1.0),
+    "upper": (0.1, 0.6, 0.8, 1.0),
+    "slide": (0.9, 0.3, 0.7, 1.0),
+    "handle": (0.6, 0.0, 0.4, 1.0),
+    "lid": (0.7, 0.8, 0.1, 1.0),
+}
+
+
+def _box(
+    body: mujoco.MjsBody,
+    size: Sequence[float],
+    pos: Sequence[float],
+    colour: str,
+    name: str = "",
+) -> None:
+    body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=list(size),
+        pos=list(pos),
+        rgba=list(_COLOURS[colour]),
+    )
+
+
+def build_cabinet(spec: mujoco.MjSpec, pos: np.ndarray) -> mujoco.MjsBody:
+    """Add RMB's cabinet at ``pos`` (world): static shell, sliding door, hinged lid."""
+    cabinet = spec.worldbody.add_body(name=CABINET, pos=list(pos))
+    # Lower compartment: floor, sides, back, fixed front panel behind the sliding door's path.
+    _box(cabinet, (0.1, 0.15, 0.005), (0.0, 0.0, 0.005), "base")
+    for y in (0.155, -0.155):
+        _box(cabinet, (0.1, 0.005, 0.08), (0.0, y, 0.08), "base")
+    _box(cabinet, (0.005, 0.15, 0.08), (0.095, 0.0, 0.08), "base")
+    _box(cabinet, (0.005, 0.075, 0.075), (-0.085, 0.075, 0.085), "lower")
+    # Upper compartment: floor, sides, back, front wall with a notch under the lid's front edge.
+    _box(cabinet, (0.095, 0.15, 0.005), (0.0, 0.0, 0.165), "base")
+    for y in (0.155, -0.155):
+        _box(cabinet, (0.1, 0.005, 0.06), (0.0, y, 0.22), "base")
+    _box(cabinet, (0.005, 0.15, 0.06), (0.095, 0.0, 0.22), "base")
+    notch_lo, notch_hi = NOTCH_Z
+    _box(
+        cabinet, (0.005, 0.15, (notch_lo - 0.16) / 2), (-0.095, 0.0, (notch_lo + 0.16) / 2), "upper"
+    )
+    side_half = (0.15 - NOTCH_HALF_WIDTH) / 2
+    for sign in (1.0, -1.0):
+        _box(
+            cabinet,
+            (0.005, side_half, (notch_hi - notch_lo) / 2),
+            (-0.095, sign * (NOTCH_HALF_WIDTH + side_half), (notch_lo + notch_hi) / 2),
+            "upper",
+        )
+
+    door = cabinet.add_body(name=SLIDE_DOOR, pos=list(SLIDE_POS))
+    door.add_joint(
+        name=SLIDE,
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[0, 1, 0],
+        range=list(SLIDE_RANGE),
+        armature=1e-5,
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+    )
+    _box(door, (DOOR_HALF_THICKNESS, 0.075, 0.075), (0.0, -0.075, 0.085), "slide")
+    _box(
+        door,
+        (HANDLE_DEPTH / 2, HANDLE_HALF_THICKNESS, HANDLE_HALF_HEIGHT),
+        HANDLE_POS,
+        "handle",
+        name=HANDLE,
+    )
+
+    lid = cabinet.add_body(name=LID, pos=list(HINGE_POS))
+    lid.add_joint(
+        name=HINGE,
+        type=mujoco.mjtJoint.mjJNT_HINGE,
+        axis=[0, 1, 0],
+        range=[0.0, np.pi],
+        armature=1e-5,
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+    )
+    _box(lid, (0.1, 0.16, LID_THICKNESS / 2), (-0.095, 0.0, LID_THICKNESS / 2), "lid")
+
+    # The door and the lid rest exactly on the shell; MuJoCo does not filter contacts between a
+    # static body and its children, so without these the joints would rub or jam.
+    for moving in (SLIDE_DOOR, LID):
+        spec.add_exclude(bodyname1=CABINET, bodyname2=moving)
+    return cabinet
+
+
+class CabinetTask(Task):
+    """The cabinet scene shared by both variants; subclasses say which joint must open."""
+
+    world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
+    max_episode_steps = 400
+    # RMB's MujocoUR5eCabinetEnv start pose.
+    home_arm_qpos = (np.pi, -0.4 * np.pi, -0.65 * np.pi, -0.2 * np.pi, np.pi / 2, np.pi / 2)
+    cabinet_nominal_pos = np.array([0.12, -0.05, TABLE_TOP_Z])
+
+    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+        build_cabinet(spec, self.cabinet_nominal_pos)
+
+    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
+        model.body(CABINET).pos = self.cabinet_nominal_pos + offset
+
+    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+        for joint in (HINGE, SLIDE):
+            data.joint(joint).qpos[:] = 0.0
+            data.joint(joint).qvel[:] = 0.0
+
+
+class CabinetHingeTask(CabinetTask):
+    """Open the lid beyond 120 degrees (RMB's ``target_task="hinge"``)."""
+
+    rmb_env_name = "MujocoUR5eCabinetHinge"
+    description = "Lift the cabinet's lid and flip it open."
+    open_angle_deg = 120.0
+
+    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+        return bool(data.joint(HINGE).qpos[0] > np.deg2rad(self.open_angle_deg))
+
+
+class CabinetSlideTask(CabinetTask):
+    """Slide the door open beyond 0.12 m (RMB's ``target_task="slide"``)."""
+
+    rmb_env_name = "MujocoUR5eCabinetSlide"
+    description = "Hook the gripper onto the handle and slide the cabinet door open."
+    open_distance = 0.12
+
+    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+        return bool(data.joint(SLIDE).qpos[0] > self.open_distance)
