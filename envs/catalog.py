@@ -1,27 +1,12 @@
-"""Tasks and their scripted experts by short name: the table scripts and tests iterate over."""
+"""Task and expert classes by short name, loaded from the env table.
+
+The table itself is :data:`rmb_lerobot.envs.registry.ENVS` (names only, no MuJoCo import);
+this module imports every task and expert, for scripts and tests that iterate over them.
+"""
 
 from __future__ import annotations
 
-from rmb_lerobot.envs.experts.cabinet import CabinetHingeExpert, CabinetSlideExpert
-from rmb_lerobot.envs.experts.door import DoorExpert
-from rmb_lerobot.envs.experts.insert import InsertExpert
-from rmb_lerobot.envs.experts.toolbox import ToolboxExpert
-from rmb_lerobot.envs.tasks.cabinet import CabinetHingeTask, CabinetSlideTask
-from rmb_lerobot.envs.tasks.door import DoorTask
-from rmb_lerobot.envs.tasks.insert import InsertTask
-from rmb_lerobot.envs.tasks.toolbox import ToolboxTask
+from rmb_lerobot.envs.registry import ENVS
 
-TASKS = {
-    "insert": InsertTask,
-    "door": DoorTask,
-    "toolbox": ToolboxTask,
-    "cabinet_hinge": CabinetHingeTask,
-    "cabinet_slide": CabinetSlideTask,
-}
-EXPERTS = {
-    "insert": InsertExpert,
-    "door": DoorExpert,
-    "toolbox": ToolboxExpert,
-    "cabinet_hinge": CabinetHingeExpert,
-    "cabinet_slide": CabinetSlideExpert,
-}
+TASKS = {name: entry.load_task_class() for name, entry in ENVS.items()}
+EXPERTS = {name: entry.load_expert_class() for name, entry in ENVS.items()}

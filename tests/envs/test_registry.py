@@ -25,7 +25,13 @@ def test_entry_matches_its_task_and_expert(name):
         assert entry_for(alias) is entry
 
 
-def test_table_covers_every_task_in_the_catalog():
+def test_every_task_module_in_the_package_is_in_the_table():
+    from pathlib import Path
+
+    import rmb_lerobot.envs.tasks as tasks
+
+    modules = {p.stem for p in Path(tasks.__file__).parent.glob("*.py")} - {"__init__", "base"}
+    assert modules == {entry.task_class.split(":")[0].rsplit(".", 1)[1] for entry in ENVS.values()}
     assert set(ENVS) == set(TASKS) == set(EXPERTS)
 
 
