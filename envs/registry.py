@@ -70,6 +70,7 @@ ENVS: dict[str, EnvEntry] = {
     for entry in (
         _entry("cabinet_hinge", "CabinetHingeTask", "CabinetHingeExpert"),
         _entry("cabinet_slide", "CabinetSlideTask", "CabinetSlideExpert"),
+        _entry("cable", "CableTask", "CableExpert"),
         _entry("door", "DoorTask", "DoorExpert"),
         _entry("insert", "InsertTask", "InsertExpert"),
         _entry("toolbox", "ToolboxTask", "ToolboxExpert"),

@@ -67,9 +67,14 @@ def relative_pose(prev_pose: np.ndarray, current_pose: np.ndarray) -> np.ndarray
     """``prev^-1 * current`` as ``(tx, ty, tz, roll, pitch, yaw)``: RMB's ``*_eef_pose_rel``."""
     prev = pose_to_matrix(prev_pose)
     cur = pose_to_matrix(current_pose)
-    rel = np.linalg.inv(prev) @ cur
-    rpy = Rotation.from_matrix(rel[..., :3, :3].reshape(-1, 3, 3)).as_euler(_RPY)
-    return np.concatenate([rel[..., :3, 3], rpy.reshape(*rel.shape[:-2], 3)], axis=-1)
+    return matrix_to_rel_pose(np.linalg.inv(prev) @ cur)
+
+
+def matrix_to_rel_pose(matrix: np.ndarray) -> np.ndarray:
+    """Homogeneous transforms ``(..., 4, 4)`` -> ``(tx, ty, tz, roll, pitch, yaw)``."""
+    matrix = np.asarray(matrix, dtype=np.float64)
+    rpy = Rotation.from_matrix(matrix[..., :3, :3].reshape(-1, 3, 3)).as_euler(_RPY)
+    return np.concatenate([matrix[..., :3, 3], rpy.reshape(*matrix.shape[:-2], 3)], axis=-1)
 
 
 def rel_pose_to_matrix(rel_pose: np.ndarray) -> np.ndarray:

@@ -14,7 +14,10 @@ import importlib
 # Modules whose import registers LeRobot env types (``--env.type=rmb_...``).
 ENV_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.envs.lerobot_config",)
 # Modules whose import registers LeRobot policy types (``--policy.type=...``).
-POLICY_CONFIG_MODULES: tuple[str, ...] = ()
+POLICY_CONFIG_MODULES: tuple[str, ...] = (
+    "rmb_lerobot.policies_extra.mlp.configuration_mlp",
+    "rmb_lerobot.policies_extra.sarnn.configuration_sarnn",
+)
 
 ENV_TYPE_PREFIX = "rmb_"
 

@@ -2,9 +2,13 @@
 
 Rendering is software (llvmpipe/OSMesa) on most headless machines and dominates the cost of a
 step, so: shadows and reflections are off by default, only the requested cameras are rendered,
-the scene is built once per step and only the camera changes between cameras, and RGB and the
-depth buffer are read back from the same pass with ``mjr_readPixels``. Depth is z-depth in
-metres, linearised from the depth buffer with the model's near/far planes (as RMB does).
+the scene is built once per step and only the camera changes between cameras, RGB and the
+depth buffer are read back from the same pass with ``mjr_readPixels``, and one GL context
+serves all cameras. Multisample anti-aliasing (MuJoCo's default 4 samples, as RMB renders) can
+be turned off: about 2x faster at 640x480 in software, with aliased edges. The robot's visual
+meshes are simplified when the model is built (:mod:`rmb_lerobot.envs.mujoco.meshes`). Depth
+is z-depth in metres, linearised from the depth buffer with the model's near/far planes (as
+RMB does).
 """
 
 from __future__ import annotations
@@ -23,7 +27,8 @@ import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imp
 class MultiCameraRenderer:
     """Render named cameras of one model to ``uint8 (H, W, 3)`` RGB and ``float32 (H, W)`` depth.
 
-    One OpenGL context per renderer; use it from the thread that created it.
+    One OpenGL context per renderer; use it from the thread that created it. ``antialias=False``
+    renders without multisampling (``vis.quality.offsamples = 0`` for this renderer only).
     """
 
     def __init__(
@@ -34,6 +39,7 @@ class MultiCameraRenderer:
         *,
         shadows: bool = False,
         reflections: bool = False,
+        antialias: bool = True,
         max_geom: int = 10000,
     ):
         if width <= 0 or height <= 0:
@@ -48,7 +54,13 @@ class MultiCameraRenderer:
         self.width, self.height = int(width), int(height)
         self._gl = mujoco.GLContext(offwidth, offheight)
         self._gl.make_current()
-        self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
+        samples = model.vis.quality.offsamples
+        if not antialias:
+            model.vis.quality.offsamples = 0  # read when the context is made
+        try:
+            self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
+        finally:
+            model.vis.quality.offsamples = samples
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._context)
         self._scene = mujoco.MjvScene(model, maxgeom=max_geom)
         self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
@@ -63,6 +75,7 @@ class MultiCameraRenderer:
         extent = model.stat.extent
         self._near = float(model.vis.map.znear * extent)
         self._far = float(model.vis.map.zfar * extent)
+        self._depth_scale = np.float32(1.0 - self._near / self._far)
 
     def camera_id(self, name: str) -> int:
         cam_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, name)
@@ -72,9 +85,14 @@ class MultiCameraRenderer:
         return cam_id
 
     def linearize_depth(self, buffer: np.ndarray) -> np.ndarray:
-        """OpenGL depth buffer values in [0, 1] -> z-depth in metres."""
-        near, far = self._near, self._far
-        return (near / (1.0 - buffer * (1.0 - near / far))).astype(np.float32)
+        """OpenGL depth buffer values in [0, 1] -> z-depth in metres (a new float32 array).
+
+        Computed in float32 without temporaries: the rounding adds about as much error as the
+        24-bit depth buffer's own steps (measured: < 0.03 mm below 3 m, 0.5 mm at 13 m).
+        """
+        out = np.multiply(buffer, -self._depth_scale, dtype=np.float32)
+        out += np.float32(1.0)
+        return np.divide(np.float32(self._near), out, out=out)
 
     def render(
         self,

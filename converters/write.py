@@ -1,0 +1,146 @@
+"""Stream RMB episodes into a LeRobotDataset through LeRobot's own writer.
+
+Per episode: the low-dimensional keys are read at once (small), images are decoded in chunks
+straight from the episode's videos (sequential decoding, no seeking) and handed to
+``add_frame``; LeRobot's streaming encoder threads encode them while the next chunk decodes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import shutil
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import av
+import numpy as np
+from lerobot.configs import DepthEncoderConfig, RGBEncoderConfig, depth_encoder_defaults
+from rmb_lerobot.converters.copy import COPY, COPYABLE_CODEC
+from rmb_lerobot.converters.encoder import ConversionDataset
+from rmb_lerobot.converters.plan import ConversionPlan, EpisodeSource
+from rmb_lerobot.converters.progress import Progress
+from rmb_lerobot.converters.rate import lerobot_fps
+
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.episode import open_episode
+from rmb_lerobot.episode.layout import rgb_video_path
+from rmb_lerobot.errors import RmbFormatError
+
+# Dataset frames decoded per read: bounds memory (32 x 640x480x3 = 29 MB per camera).
+CHUNK = 32
+_TASK = "task"  # the per-frame task string LeRobot's add_frame requires
+_X265_PARAMS = "x265-params"
+
+
+def quiet_depth_encoder() -> DepthEncoderConfig:
+    """LeRobot's default depth encoder, minus x265's per-video console report."""
+    config = depth_encoder_defaults()
+    params = config.extra_options.get(_X265_PARAMS)
+    if params is not None and config.vcodec == "hevc":
+        config.extra_options = {**config.extra_options, _X265_PARAMS: f"{params}:log-level=error"}
+    return config
+
+
+@dataclass(frozen=True)
+class VideoSettings:
+    """How RGB is written: LeRobot's ``vcodec`` (None: LeRobot's default) or ``"copy"``."""
+
+    codec: str | None = None
+    copied_gop: int | None = None  # keyframe interval of copied streams (from .copy)
+
+    @property
+    def copy(self) -> bool:
+        return self.codec == COPY
+
+    def rgb_encoder(self) -> RGBEncoderConfig | None:
+        """LeRobot's RGB encoder settings; for copied H.264, a description of the stream."""
+        if self.copy:
+            return RGBEncoderConfig(vcodec=COPYABLE_CODEC, g=self.copied_gop, crf=None, preset=None)
+        return RGBEncoderConfig(vcodec=self.codec) if self.codec else None
+
+
+def create_dataset(
+    root: Path, repo_id: str, plan: ConversionPlan, video: VideoSettings
+) -> ConversionDataset:
+    """An empty dataset at ``root`` (which must not exist), ready for :func:`add_episode`."""
+    return ConversionDataset.create(
+        repo_id=repo_id,
+        fps=lerobot_fps(plan.rate),
+        features=plan.schema.features(),
+        root=root,
+        robot_type=plan.robot_type,
+        use_videos=True,
+        rgb_encoder=video.rgb_encoder(),
+        depth_encoder=quiet_depth_encoder(),
+        streaming_encoding=True,
+    )
+
+
+def add_episode(
+    dataset: ConversionDataset,
+    source: EpisodeSource,
+    plan: ConversionPlan,
+    progress: Progress,
+    copy_rgb: bool = False,
+) -> None:
+    """Append one episode; any failure is re-raised naming the episode."""
+    schema, skip = plan.schema, plan.skip
+    if copy_rgb:
+        dataset.video_encoder.copy_from(
+            {
+                N.image_key(camera): rgb_video_path(source.path, K.rgb_image_key(camera))
+                for camera in schema.cameras
+            }
+        )
+    try:
+        with open_episode(source.path) as episode:
+            lowdim = {key: np.asarray(episode[key][:]) for key in schema.lowdim_keys}
+            arrays = schema.episode_arrays(lowdim, skip)
+            videos = {feature: episode[key] for feature, key in schema.image_keys().items()}
+            steps = len(episode)
+            for start in range(0, steps, CHUNK * skip):
+                stop = min(steps, start + CHUNK * skip)
+                images = {f: series[start:stop:skip] for f, series in videos.items()}
+                first = start // skip
+                for j in range(-(-(stop - start) // skip)):
+                    frame = {feature: values[first + j] for feature, values in arrays.items()}
+                    for feature, frames in images.items():
+                        image = frames[j]
+                        frame[feature] = image[..., None] if image.ndim == 2 else image
+                    frame[_TASK] = source.task
+                    dataset.add_frame(frame)
+                progress.frames(-(-(stop - start) // skip))
+            dataset.save_episode()
+    except RmbFormatError:
+        raise
+    except (av.FFmpegError, ValueError, KeyError, IndexError) as exc:  # unreadable or bad data
+        raise RmbFormatError(f"cannot convert episode: {exc}", path=source.path) from exc
+    except BaseException as exc:
+        exc.add_note(f"while converting episode {str(source.path)!r}")
+        raise
+    progress.episode_done()
+
+
+def write_dataset(
+    root: Path,
+    repo_id: str,
+    plan: ConversionPlan,
+    episodes: Sequence[EpisodeSource],
+    video: VideoSettings,
+    progress: Progress,
+) -> Path:
+    """Convert ``episodes`` into a finalized dataset at ``root``; nothing is left on failure."""
+    dataset = create_dataset(root, repo_id, plan, video)
+    try:
+        for source in episodes:
+            add_episode(dataset, source, plan, progress, copy_rgb=video.copy)
+    except BaseException:
+        # Finalize first: LeRobot's writer would otherwise flush into the removed tree on exit.
+        with contextlib.suppress(Exception):
+            dataset.finalize()
+        shutil.rmtree(root, ignore_errors=True)
+        raise
+    dataset.finalize()
+    return root

@@ -1,0 +1,194 @@
+"""Scripted expert for the Cable task: grasp the end box and route the cable into the S shape.
+
+The cable cannot be threaded through the 3 cm gap between the poles end first (the box and the
+fingers are wider than the gap), so it is dropped into the gap from above:
+
+1. Grasp the end box from above (fingers across the box).
+2. Drag it on the table in a counter-clockwise half circle and then straight along +y towards
+   the gap, on the vertical line through the gap's centre. The cable now runs from the
+   connector down the left of pole 1 and back up below the gap (a U).
+3. Lift the box straight up by ``hang``: that much cable is pulled out of the U (which shrinks
+   towards pole 1) and hangs from the box: the length needed beyond the gap.
+4. Carry the box over the poles to ``beyond_gap`` past the pole line and lower it to the table:
+   the hanging cable stays in the vertical plane through the gap's centre, so it drops into the
+   gap (measured: still in with the plane 6 mm off the gap's centre, sometimes at 12 mm).
+5. Drag the box right past pole 2 and then down its far side until it is ``end_below`` the pole
+   line: the cable wraps around pole 2 and the end lies where RMB's success test wants it.
+6. Let go and back off upwards.
+
+The box and pole positions are read from the simulator (privileged) and the route is planned
+once, when the box is grasped, so it adapts to every world and random shift. While dragging,
+the box's cable-to-end axis is turned along the direction of travel, so the cable trails it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from typing import Any
+
+import numpy as np
+from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.cable import CABLE_END, END_BOX_HALF_SIZE, POLE1, POLE2
+from scipy.spatial.transform import Rotation
+
+UP, RIGHT, DOWN = np.pi / 2, 0.0, -np.pi / 2  # box headings (yaw of its cable-to-end axis)
+
+
+@dataclass(frozen=True)
+class Leg:
+    """Carry the box centre to ``pos`` (world) at ``speed`` with its cable-to-end axis at yaw
+    ``heading``."""
+
+    pos: np.ndarray
+    heading: float
+    speed: float
+
+
+class Phase(Enum):
+    ABOVE = "above"
+    DESCEND = "descend"
+    CLOSE = "close"
+    ROUTE = "route"
+    RELEASE = "release"
+    RETREAT = "retreat"
+
+
+def _yaw(rot: np.ndarray) -> float:
+    return float(np.arctan2(rot[1, 0], rot[0, 0]))
+
+
+class CableExpert(ScriptedExpert):
+    """Tool point: the gripper's pinch point, ``grasp_dz`` above the box centre once grasped."""
+
+    approach_height = 0.06  # pre-grasp height of the pinch point above the grasp point (m)
+    grasp_dz = 0.006  # pinch point above the box centre (the fingertips stay off the table)
+    drag_lift = 0.006  # box lifted this far off the table while dragging (m)
+    below_gap = 0.07  # the box stops this far before the pole line before lifting (m)
+    hang = 0.2  # cable length lifted off the table to go beyond the gap (m)
+    beyond_gap = 0.05  # the box is lowered this far past the pole line (m)
+    end_offset = 0.05  # last leg this far right of pole 2's centre (clears the fingers, m)
+    end_below = 0.07  # the box ends this far below the pole line (success: 0.05, m)
+    drag_speed, lift_speed, final_speed = 0.15, 0.1, 0.1  # m/s
+    half_circle_points = 6
+    open_gripper, closed_gripper = 0.0, 255.0
+    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
+    settle_tol = 0.5  # gripper value change per step that counts as settled
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        super().__init__(env, **kwargs)
+        self._cruise_step = self.max_step
+
+    def on_reset(self) -> None:
+        self.max_step = self._cruise_step
+        self.phase = Phase.ABOVE
+        self._count = 0
+        self._last_gripper = 0.0
+        self._route: list[Leg] = []
+        self._leg = 0
+        site = self.env.data.site(self.env.robot.tcp_site)
+        eef_pos, eef_rot = self.eef_world()
+        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        box_rot = self.env.data.body(CABLE_END).xmat.reshape(3, 3)
+        self._box_yaw0 = _yaw(box_rot)
+        self._yaw = self._box_yaw0
+        self._grasp_rot = self._grasp_rotation(box_rot[:, 1], eef_rot)
+
+    @staticmethod
+    def _grasp_rotation(box_y: np.ndarray, current: Rotation) -> Rotation:
+        """Gripper down, fingers (the eef x axis) closing across the box; of the two such
+        orientations the one nearer the current hand."""
+        across = np.array([box_y[0], box_y[1], 0.0])
+        across /= np.linalg.norm(across)
+        if across @ current.apply([1.0, 0.0, 0.0]) < 0:
+            across = -across
+        down = np.array([0.0, 0.0, -1.0])
+        return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+
+    def tool_offset(self) -> np.ndarray:
+        return self._offset
+
+    def measured_tool(self) -> np.ndarray:
+        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+
+    # ------------------------------------------------------------------ helpers
+    def _hand_rotation(self, heading: float) -> Rotation:
+        """The grasp orientation turned about the vertical so the box heads along ``heading``,
+        taking the shorter way from the last commanded heading."""
+        self._yaw += (heading - self._yaw + np.pi) % (2 * np.pi) - np.pi
+        return Rotation.from_euler("z", self._yaw - self._box_yaw0) * self._grasp_rot
+
+    def _gripper_settled(self) -> bool:
+        self._count += 1
+        gripper = self.env.measured_joint_pos()[-1]
+        settled = abs(gripper - self._last_gripper) < self.settle_tol
+        self._last_gripper = gripper
+        return self._count >= self.min_gripper_steps and settled
+
+    def plan_route(self) -> list[Leg]:
+        """The legs of steps 2-5 for the current box and pole positions."""
+        data = self.env.data
+        pole1, pole2 = data.geom(POLE1).xpos, data.geom(POLE2).xpos
+        box = data.body(CABLE_END).xpos
+        low = TABLE_TOP_Z + END_BOX_HALF_SIZE[2] + self.drag_lift
+        high = low + self.hang
+        gap_x, pole_y = 0.5 * (pole1[0] + pole2[0]), pole1[1]
+        radius = 0.5 * (gap_x - box[0])
+        centre = np.array([box[0] + radius, box[1]])
+        legs = []
+        # Counter-clockwise half circle from the start (heading -y) to the gap line (heading +y).
+        for phi in np.linspace(np.pi, 2 * np.pi, self.half_circle_points + 1)[1:]:
+            xy = centre + radius * np.array([np.cos(phi), np.sin(phi)])
+            legs.append(Leg(np.array([*xy, low]), phi + np.pi / 2, self.drag_speed))
+        before, after = pole_y - self.below_gap, pole_y + self.beyond_gap
+        end_x = pole2[0] + self.end_offset
+        legs += [
+            Leg(np.array([gap_x, before, low]), UP, self.drag_speed),
+            Leg(np.array([gap_x, before, high]), UP, self.lift_speed),
+            Leg(np.array([gap_x, after, high]), UP, self.lift_speed),
+            Leg(np.array([gap_x, after, low]), UP, self.lift_speed),
+            Leg(np.array([end_x, after, low]), RIGHT, self.final_speed),
+            Leg(np.array([end_x, pole_y - self.end_below, low]), DOWN, self.final_speed),
+        ]
+        return legs
+
+    # ------------------------------------------------------------------ phases
+    def waypoint(self) -> Waypoint:
+        dz = np.array([0.0, 0.0, self.grasp_dz])
+        if self.phase is Phase.ABOVE:
+            target = self.env.data.body(CABLE_END).xpos + dz
+            target[2] += self.approach_height
+            if self.reached(target, 0.01):
+                self.phase = Phase.DESCEND
+            return Waypoint(target, self._grasp_rot, self.open_gripper)
+        if self.phase is Phase.DESCEND:
+            target = self.env.data.body(CABLE_END).xpos + dz
+            if self.reached(target, 0.003):
+                self.phase = Phase.CLOSE
+                self._hold = target
+            return Waypoint(target, self._grasp_rot, self.open_gripper)
+        if self.phase is Phase.CLOSE:
+            if self._gripper_settled():
+                self.phase = Phase.ROUTE
+                self._route = self.plan_route()
+            return Waypoint(self._hold, self._grasp_rot, self.closed_gripper)
+        if self.phase is Phase.ROUTE:
+            leg = self._route[self._leg]
+            self.max_step = leg.speed * self.dt
+            target = leg.pos + dz
+            if self.reached(target, 0.01):
+                self._leg += 1
+                if self._leg == len(self._route):
+                    self.phase = Phase.RELEASE
+                    self._count = 0
+                    self._hold = target
+                    self.max_step = self._cruise_step
+            return Waypoint(target, self._hand_rotation(leg.heading), self.closed_gripper)
+        rot = self._hand_rotation(self._yaw)
+        if self.phase is Phase.RELEASE:
+            if self._gripper_settled():
+                self.phase = Phase.RETREAT
+            return Waypoint(self._hold, rot, self.open_gripper)
+        target = self._hold + np.array([0.0, 0.0, self.approach_height])
+        return Waypoint(target, rot, self.open_gripper)

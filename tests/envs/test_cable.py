@@ -1,0 +1,228 @@
+"""Cable: success criterion on constructed cables, worlds, rod model, stability, the expert."""
+
+import mujoco
+import numpy as np
+import pytest
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.experts.cable import CableExpert
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.cable import (
+    CABLE,
+    CABLE_END,
+    CABLE_LENGTH,
+    CABLE_RADIUS,
+    POLE1,
+    POLE2,
+    POLE_HALF_HEIGHT,
+    POLE_SPACING,
+    CableTask,
+    crosses_between_poles,
+    s_shape_routed,
+)
+
+REST_Z = CableTask.anchor_pos[2]  # cable centre line lying on the table
+P1 = CableTask.poles_nominal_pos + np.array([0.0, 0.0, POLE_HALF_HEIGHT])  # pole centres
+P2 = P1 + np.array([POLE_SPACING, 0.0, 0.0])
+ANCHOR = CableTask.anchor_pos
+
+
+@pytest.fixture(scope="module")
+def cable_env():
+    env = RmbEnv(CableTask(), cameras=())
+    yield env
+    env.close()
+
+
+def _polyline(*xy: tuple[float, float]) -> np.ndarray:
+    return np.array([[x, y, REST_Z] for x, y in xy])
+
+
+# Down the left of pole 1, up through the gap, over pole 2 and down its far side.
+S_SHAPE = _polyline(
+    (ANCHOR[0], ANCHOR[1]), (-0.14, 0.06), (-0.075, 0.06), (-0.075, 0.14), (0.0, 0.14), (0.0, 0.03)
+)
+
+
+def test_s_shape_is_a_success():
+    assert s_shape_routed(S_SHAPE, S_SHAPE[-1], P1, P2)
+
+
+def test_a_raised_point_fails():
+    raised = S_SHAPE.copy()
+    raised[3, 2] = P1[2] + 0.011  # a point above the poles' centre height + 1 cm
+    assert not s_shape_routed(raised, raised[-1], P1, P2)
+    raised[3, 2] = P1[2] + 0.009
+    assert s_shape_routed(raised, raised[-1], P1, P2)
+
+
+@pytest.mark.parametrize(
+    "end",
+    [
+        (P2[0] - 0.005, P1[1] - 0.06),  # not beyond pole 2
+        (P2[0] + 0.05, P1[1] - 0.045),  # not far enough below the pole line
+    ],
+)
+def test_end_outside_the_goal_region_fails(end):
+    cable = np.vstack([S_SHAPE[:-1], [[*end, REST_Z]]])
+    assert crosses_between_poles(cable, P1, P2)
+    assert not s_shape_routed(cable, cable[-1], P1, P2)
+
+
+def test_cable_around_pole2_instead_of_through_the_gap_fails():
+    around = _polyline(
+        (ANCHOR[0], ANCHOR[1]), (-0.14, 0.06), (-0.02, 0.06), (-0.02, 0.14), (0.02, 0.14),
+        (0.02, 0.03),
+    )  # fmt: skip
+    assert not crosses_between_poles(around, P1, P2)
+    assert not s_shape_routed(around, around[-1], P1, P2)
+
+
+def test_crossing_the_gap_the_wrong_way_fails():
+    reverse = S_SHAPE[::-1].copy()  # the same curve listed from the end: -y through the gap
+    assert crosses_between_poles(S_SHAPE, P1, P2)
+    assert not crosses_between_poles(reverse, P1, P2)
+
+
+def _resample(path: np.ndarray, count: int, length: float) -> np.ndarray:
+    """``count`` points evenly spaced along the first ``length`` metres of ``path``."""
+    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    s = np.linspace(0.0, length, count)
+    return np.column_stack([np.interp(s, cum, path[:, k]) for k in range(3)])
+
+
+def _set_cable(env: RmbEnv, points: np.ndarray) -> None:
+    """Put the simulated cable's vertices at ``points`` (the end box follows the last edge)."""
+    model, data = env.model, env.data
+    n = len(points)
+    for i in range(1, n - 2):
+        body = model.body(f"{CABLE}_{i}")
+        adr = model.jnt_qposadr[body.jntadr[0]]
+        data.qpos[adr : adr + 3] = points[i] - body.pos
+    direction = points[-1] - points[-2]
+    yaw = np.arctan2(direction[1], direction[0])
+    data.joint(CABLE_END).qpos[:] = [*points[-1], np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)]
+    mujoco.mj_forward(model, data)
+
+
+def test_is_success_reads_the_simulated_cable(cable_env):
+    cable_env.reset(seed=0, options={"world_idx": 1})
+    assert not cable_env.task.is_success(cable_env.model, cable_env.data)  # straight at start
+    extended = np.vstack([S_SHAPE, [[0.0, -0.2, REST_Z]]])  # long enough to resample 0.48 m
+    wanted = _resample(extended, CableTask.num_vertices, CABLE_LENGTH)
+    _set_cable(cable_env, wanted)
+    assert cable_env.task.cable_points(cable_env.model, cable_env.data) == pytest.approx(wanted)
+    assert cable_env.task.is_success(cable_env.model, cable_env.data)
+
+
+def test_cable_is_an_elastic_rod_on_the_discrete_integrator(cable_env):
+    model = cable_env.model
+    flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CABLE)
+    assert model.nflex == 1 and model.flex_dim[flex] == 1
+    assert model.flex_vertnum[flex] == CableTask.num_vertices
+    assert model.flex_radius[flex] == CABLE_RADIUS
+    assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_DISCRETE
+
+
+@pytest.mark.parametrize("world_idx", [0, 5])
+def test_worlds_shift_the_poles_only(cable_env, world_idx):
+    _, info = cable_env.reset(seed=0, options={"world_idx": world_idx})
+    offset = CableTask.world_offsets[world_idx]
+    assert cable_env.data.geom(POLE1).xpos == pytest.approx(P1 + offset)
+    assert cable_env.data.geom(POLE2).xpos == pytest.approx(P2 + offset)
+    points = cable_env.task.cable_points(cable_env.model, cable_env.data)
+    assert points[0] == pytest.approx(ANCHOR)
+    assert points[-1] == pytest.approx(ANCHOR - np.array([0.0, CABLE_LENGTH, 0.0]))
+    assert not info["is_success"]
+
+
+def test_worlds_span_rmbs_pole_offsets():
+    assert CableTask.world_offsets[:, 0] == pytest.approx(np.linspace(-0.03, 0.12, 6))
+
+
+def test_random_shift_is_bounded_planar_and_seeded(cable_env):
+    nominal = P1 + CableTask.world_offsets[3]
+    positions = []
+    for _ in range(2):
+        cable_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
+        positions.append(cable_env.data.geom(POLE1).xpos.copy())
+    shift = positions[0] - nominal
+    assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
+    assert shift[2] == 0.0  # the poles stand on the table
+    assert positions[1] == pytest.approx(positions[0])
+
+
+def test_start_pose_is_rmbs(cable_env):
+    obs, _ = cable_env.reset(seed=0)
+    assert obs["agent_pos"][:6] == pytest.approx(CableTask.home_arm_qpos, abs=1e-6)
+
+
+def test_random_actions_keep_the_simulation_stable():
+    env = RmbEnv(CableTask(), cameras=())
+    try:
+        env.action_space.seed(0)
+        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+        slide = np.concatenate(
+            [
+                env.model.jnt_dofadr[env.model.body(f"{CABLE}_{i}").jntadr[0]] + np.arange(3)
+                for i in range(1, CableTask.num_vertices - 2)
+            ]
+        )
+        fastest = 0.0
+        for _ in range(1000):
+            env.step(env.action_space.sample())
+            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+            fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
+        points = env.task.cable_points(env.model, env.data)
+        edges = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        spacing = CABLE_LENGTH / (CableTask.num_vertices - 1)
+    finally:
+        env.close()
+    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    assert edges == pytest.approx(spacing, rel=0.1)
+    assert points[:, 2].min() > TABLE_TOP_Z  # the cable has not fallen through the table
+
+
+def test_same_seed_same_rollout(cable_env):
+    def rollout() -> np.ndarray:
+        cable_env.reset(seed=3, options={"random_shift": 0.03})
+        rng = np.random.default_rng(3)
+        for _ in range(30):
+            action = cable_env.home_command + rng.normal(0.0, 0.05, 7)
+            action[-1] = 255.0 * rng.random()
+            cable_env.step(action.astype(np.float32))
+        return cable_env.data.qpos.copy()
+
+    first = rollout()
+    cable_env.reset(seed=4)
+    assert np.array_equal(rollout(), first)
+
+
+def test_catalog_lists_the_cable():
+    assert TASKS["cable"] is CableTask and EXPERTS["cable"] is CableExpert
+
+
+def _run_expert(env: RmbEnv, episode: int) -> dict:
+    expert = CableExpert(env)
+    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
+    expert.reset()
+    info = {}
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        if terminated:
+            break
+    return info
+
+
+@pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest poles
+def test_expert_routes_the_cable(cable_env, episode):
+    info = _run_expert(cable_env, episode)
+    assert info["is_success"], f"episode {episode}: end at {cable_env.data.body(CABLE_END).xpos}"
+
+
+def test_expert_in_eef_rel_mode():
+    env = RmbEnv(CableTask(), cameras=(), action_mode="eef_rel")
+    try:
+        assert _run_expert(env, 3)["is_success"]
+    finally:
+        env.close()

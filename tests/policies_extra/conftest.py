@@ -1,0 +1,178 @@
+"""Shared fixtures for the policy plugins: tiny features, batches, a LeRobotDataset, CLI runs."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs.types import FeatureType, PolicyFeature
+
+import lerobot_env_rmb  # noqa: F401 - registers --policy.type=mlp/sarnn, as LeRobot's discovery
+
+STATE_DIM = ACTION_DIM = 7
+IMAGE = (3, 32, 32)
+FPS = 31
+FRONT = "observation.images.front"
+EPISODES, EPISODE_LEN = 2, 24
+
+
+@pytest.fixture(autouse=True)
+def one_torch_thread():
+    """One intra-op thread: the suite runs on 2 shared cores with ``-n 2`` workers."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+@pytest.fixture
+def features() -> tuple[dict, dict]:
+    """(input_features, output_features) of one 32x32 camera and UR5e-sized state/action."""
+    inputs = {
+        "observation.state": PolicyFeature(FeatureType.STATE, (STATE_DIM,)),
+        FRONT: PolicyFeature(FeatureType.VISUAL, IMAGE),
+    }
+    return inputs, {"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))}
+
+
+def synthetic_episode(length: int, phase: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Smooth joint trajectories, actions leading the state, and a square that follows joint 0.
+
+    The image depends on the state, so both policies can learn something from either input.
+    """
+    t = np.arange(length)[:, None] / FPS
+    freqs = np.linspace(0.5, 1.5, STATE_DIM)[None]
+    state = np.sin(2 * np.pi * freqs * t + phase).astype(np.float32)
+    action = np.sin(2 * np.pi * freqs * (t + 1 / FPS) + phase).astype(np.float32)
+    images = np.zeros((length, IMAGE[1], IMAGE[2], 3), dtype=np.uint8)
+    for i, s in enumerate(state):
+        x = int((s[0] + 1) / 2 * (IMAGE[2] - 8))
+        y = int((s[1] + 1) / 2 * (IMAGE[1] - 8))
+        images[i, y : y + 8, x : x + 8] = (255, 160, 40)
+    return state, action, images
+
+
+def to_policy_batch(state, action, images, length: int) -> dict[str, torch.Tensor]:
+    """Windows of ``length`` + 1 frames (as LeRobot's delta indices give), batched over starts."""
+    starts = range(0, len(state) - length)
+    obs = slice(0, length + 1)
+    return {
+        "observation.state": torch.stack([torch.from_numpy(state[s:][obs]) for s in starts]),
+        FRONT: torch.stack(
+            [torch.from_numpy(images[s:][obs]).permute(0, 3, 1, 2).float() / 255 for s in starts]
+        ),
+        "action": torch.stack([torch.from_numpy(action[s + 1 : s + 1 + length]) for s in starts]),
+        "action_is_pad": torch.zeros(len(starts), length, dtype=torch.bool),
+    }
+
+
+@pytest.fixture
+def windows():
+    """``windows(length, phase)``: every window of one synthetic episode, as a policy batch."""
+
+    def _windows(length: int, phase: float = 0.0) -> dict[str, torch.Tensor]:
+        return to_policy_batch(*synthetic_episode(EPISODE_LEN, phase), length)
+
+    return _windows
+
+
+@pytest.fixture(scope="session")
+def tiny_dataset(tmp_path_factory) -> Path:
+    """A 2-episode LeRobotDataset v3 (state, one 32x32 video camera, action) at 31 fps."""
+    from lerobot.datasets import LeRobotDataset
+
+    root = tmp_path_factory.mktemp("dataset") / "tiny"
+    dataset = LeRobotDataset.create(
+        repo_id="local/tiny",
+        fps=FPS,
+        root=root,
+        robot_type="ur5e",
+        features={
+            "observation.state": {"dtype": "float32", "shape": (STATE_DIM,), "names": None},
+            FRONT: {
+                "dtype": "video",
+                "shape": (IMAGE[1], IMAGE[2], 3),
+                "names": ["height", "width", "channels"],
+            },
+            "action": {"dtype": "float32", "shape": (ACTION_DIM,), "names": None},
+        },
+    )
+    for episode in range(EPISODES):
+        state, action, images = synthetic_episode(EPISODE_LEN, phase=episode)
+        for s, a, img in zip(state, action, images, strict=True):
+            dataset.add_frame(
+                {"observation.state": s, "action": a, FRONT: img, "task": "Insert the peg."}
+            )
+        dataset.save_episode()
+    dataset.finalize()
+    return root
+
+
+def run_cli(module: str, args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """Run an unmodified LeRobot CLI (``python -m lerobot.scripts.<module>``) offline."""
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
+    return subprocess.run(
+        [sys.executable, "-m", f"lerobot.scripts.{module}", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+@pytest.fixture
+def train_and_eval(tiny_dataset, tmp_path):
+    """``lerobot-train`` a few steps on the tiny dataset, then ``lerobot-eval`` the checkpoint."""
+
+    def _run(policy_type: str, policy_args: list[str]) -> dict:
+        out = tmp_path / "train"
+        train = run_cli(
+            "lerobot_train",
+            [
+                f"--policy.type={policy_type}",
+                *policy_args,
+                "--policy.device=cpu",
+                "--policy.push_to_hub=false",
+                "--dataset.repo_id=local/tiny",
+                f"--dataset.root={tiny_dataset}",
+                f"--output_dir={out}",
+                "--steps=3",
+                "--batch_size=2",
+                "--num_workers=0",
+                "--save_freq=3",
+                "--log_freq=1",
+                "--wandb.enable=false",
+            ],
+            tmp_path,
+        )
+        assert train.returncode == 0, train.stderr[-3000:]
+        checkpoint = out / "checkpoints" / "last" / "pretrained_model"
+        config = json.loads((checkpoint / "config.json").read_text())
+        assert config["type"] == policy_type
+        evaluation = run_cli(
+            "lerobot_eval",
+            [
+                f"--policy.path={checkpoint}",
+                "--policy.device=cpu",
+                "--env.type=rmb_ur5e_insert",
+                "--env.cameras=[front]",
+                "--env.image_width=32",
+                "--env.image_height=32",
+                "--env.episode_length=5",
+                "--eval.n_episodes=1",
+                "--eval.batch_size=1",
+                f"--output_dir={tmp_path / 'eval'}",
+            ],
+            tmp_path,
+        )
+        assert evaluation.returncode == 0, evaluation.stderr[-3000:]
+        return json.loads((tmp_path / "eval" / "eval_info.json").read_text())
+
+    return _run
