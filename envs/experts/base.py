@@ -23,6 +23,17 @@ from scipy.spatial.transform import Rotation
 from rmb_lerobot.pose import relative_pose
 
 
+def top_down_rotation(across: np.ndarray, current: Rotation) -> Rotation:
+    """Gripper pointing down with the fingers (the eef x axis) closing along the horizontal
+    direction ``across``; of the two such orientations, the one nearer the ``current`` hand."""
+    across = np.array([across[0], across[1], 0.0])
+    across /= np.linalg.norm(across)
+    if across @ current.apply([1.0, 0.0, 0.0]) < 0:
+        across = -across
+    down = np.array([0.0, 0.0, -1.0])
+    return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+
+
 @dataclass(frozen=True)
 class Waypoint:
     """Where the tool point should go (world frame), the eef orientation, the gripper command."""

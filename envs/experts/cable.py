@@ -28,7 +28,7 @@ from enum import Enum
 from typing import Any
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
+from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.cable import CABLE_END, END_BOX_HALF_SIZE, POLE1, POLE2
 from scipy.spatial.transform import Rotation
@@ -93,18 +93,7 @@ class CableExpert(ScriptedExpert):
         box_rot = self.env.data.body(CABLE_END).xmat.reshape(3, 3)
         self._box_yaw0 = _yaw(box_rot)
         self._yaw = self._box_yaw0
-        self._grasp_rot = self._grasp_rotation(box_rot[:, 1], eef_rot)
-
-    @staticmethod
-    def _grasp_rotation(box_y: np.ndarray, current: Rotation) -> Rotation:
-        """Gripper down, fingers (the eef x axis) closing across the box; of the two such
-        orientations the one nearer the current hand."""
-        across = np.array([box_y[0], box_y[1], 0.0])
-        across /= np.linalg.norm(across)
-        if across @ current.apply([1.0, 0.0, 0.0]) < 0:
-            across = -across
-        down = np.array([0.0, 0.0, -1.0])
-        return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+        self._grasp_rot = top_down_rotation(box_rot[:, 1], eef_rot)
 
     def tool_offset(self) -> np.ndarray:
         return self._offset

@@ -16,7 +16,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
+from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.toolbox import HANDLE, MAT, MAT_TOP, TOOLBOX
 from scipy.spatial.transform import Rotation
 
@@ -63,15 +63,9 @@ class ToolboxExpert(ScriptedExpert):
         self._tool_speed = 0.0
 
     def _grasp_rotation(self, current: Rotation) -> Rotation:
-        """Gripper down, fingers (the eef x axis) across the bar; of the two such orientations
-        the one nearer the current hand."""
+        """Fingers across the handle bar (perpendicular to its axis in the horizontal plane)."""
         bar_axis = self.env.data.geom(HANDLE).xmat.reshape(3, 3)[:, 1]
-        across = np.cross([0.0, 0.0, 1.0], bar_axis)
-        across /= np.linalg.norm(across)
-        if across @ current.apply([1.0, 0.0, 0.0]) < 0:
-            across = -across
-        down = np.array([0.0, 0.0, -1.0])
-        return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+        return top_down_rotation(np.cross([0.0, 0.0, 1.0], bar_axis), current)
 
     def tool_offset(self) -> np.ndarray:
         return self._offset
