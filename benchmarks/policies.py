@@ -2,16 +2,19 @@
 
 Usage::
 
-    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn act diffusion] [--batch-size 8]
+    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn dp3 act diffusion] [--threads 1]
 
 Every policy gets its default configuration (backbones randomly initialised: no weights are
 downloaded) and the same inputs: a 7-D state and ``--cameras`` RGB cameras of ``--image-size``.
 LeRobot's ACT and Diffusion are measured in the same run as references. A training step is
 forward + backward + the policy's own optimizer preset on a random batch shaped by the
 policy's delta indices (so SARNN's batch holds ``sequence_length`` steps per sample, ACT's a
-100-action chunk). "query" is one call of ``select_action`` right after ``reset()`` (always a
-model evaluation); "per env step" is the mean over a 100-step rollout, where chunking policies
-reuse queued actions and SARNN holds its command for ``frame_skip`` steps.
+100-action chunk). DP3 also gets the first camera's depth (a random surface 0.5-1.2 m away, in
+mm as LeRobot decodes it) and samples its point clouds anew every step (cache off: the cost of
+a first epoch; later epochs reuse the clouds of frames already seen). "query" is one call of
+``select_action`` right after ``reset()`` (always a model evaluation); "per env step" is the
+mean over a 100-step rollout, where chunking policies reuse queued actions and SARNN holds its
+command for ``frame_skip`` steps.
 """
 
 from __future__ import annotations
@@ -25,9 +28,11 @@ import torch
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.policies.factory import get_policy_class, make_policy_config
 
-import lerobot_env_rmb  # noqa: F401 - registers mlp and sarnn, as LeRobot's plugin discovery
+import lerobot_env_rmb  # noqa: F401 - registers mlp, sarnn, dp3, as LeRobot's plugin discovery
 
 STATE_DIM = ACTION_DIM = 7  # UR5e joints + gripper
+DEPTH_POLICIES = {"dp3": {"camera_fovy": 45.0, "point_cloud_cache_size": 0}}
+DEPTH_SUFFIX = "_depth"
 
 
 def build(policy_type: str, cameras: int, image_size: int):
@@ -39,10 +44,22 @@ def build(policy_type: str, cameras: int, image_size: int):
     outputs = {"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))}
     config_cls = type(make_policy_config(policy_type, device="cpu"))
     kwargs = {"input_features": inputs, "output_features": outputs, "device": "cpu"}
+    if policy_type in DEPTH_POLICIES:
+        inputs[f"observation.images.cam0{DEPTH_SUFFIX}"] = PolicyFeature(
+            FeatureType.VISUAL, (1, image_size, image_size)
+        )
+        kwargs |= DEPTH_POLICIES[policy_type]
     if "pretrained_backbone_weights" in {f.name for f in dataclasses.fields(config_cls)}:
         kwargs["pretrained_backbone_weights"] = None
     config = make_policy_config(policy_type, **kwargs)
     return get_policy_class(policy_type)(config)
+
+
+def random_input(key: str, shape: tuple[int, ...]) -> torch.Tensor:
+    """Images in [0, 1]; depth in millimetres, 0.5-1.2 m (inside DP3's default crop)."""
+    if key.endswith(DEPTH_SUFFIX):
+        return 500.0 + 700.0 * torch.rand(shape)
+    return torch.rand(shape)
 
 
 def training_batch(config, batch_size: int) -> dict[str, torch.Tensor]:
@@ -50,7 +67,7 @@ def training_batch(config, batch_size: int) -> dict[str, torch.Tensor]:
     batch = {}
     for key, feature in config.input_features.items():
         shape = (batch_size, *(() if obs_steps is None else (len(obs_steps),)), *feature.shape)
-        batch[key] = torch.rand(shape)
+        batch[key] = random_input(key, shape)
     n_actions = len(config.action_delta_indices)
     batch["action"] = torch.randn(batch_size, n_actions, ACTION_DIM)
     batch["action_is_pad"] = torch.zeros(batch_size, n_actions, dtype=torch.bool)
@@ -58,7 +75,7 @@ def training_batch(config, batch_size: int) -> dict[str, torch.Tensor]:
 
 
 def observation(config) -> dict[str, torch.Tensor]:
-    return {key: torch.rand(1, *feature.shape) for key, feature in config.input_features.items()}
+    return {key: random_input(key, (1, *ft.shape)) for key, ft in config.input_features.items()}
 
 
 def train_step_seconds(policy, batch_size: int, steps: int) -> float:
@@ -95,7 +112,9 @@ def inference_ms(policy, queries: int, rollout: int) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--policies", nargs="+", default=["mlp", "sarnn", "act", "diffusion"])
+    parser.add_argument(
+        "--policies", nargs="+", default=["mlp", "sarnn", "dp3", "act", "diffusion"]
+    )
     parser.add_argument("--cameras", type=int, default=2, help="RMB's UR5e default: front, hand")
     parser.add_argument("--image-size", type=int, default=128, help="our env's default, square")
     parser.add_argument("--batch-size", type=int, default=8)

@@ -12,8 +12,10 @@ import functools
 from dataclasses import dataclass, field, make_dataclass
 
 import gymnasium as gym
+import numpy as np
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
+from lerobot.utils.constants import OBS_STR
 from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
 
 from rmb_lerobot import keys as K
@@ -50,6 +52,8 @@ class RmbEnvConfig(EnvConfig):
     action_mode: str = "joint"
     random_shift: float = 0.0  # metres of uniform object shift on top of the world's offset
     render_mode: str = "rgb_array"
+    # Also deliver each camera's depth as observation.images.<camera>_depth (see DepthForLeRobot).
+    depth: bool = False
 
     def __post_init__(self) -> None:
         layout = K.UR5E_LAYOUT
@@ -64,6 +68,12 @@ class RmbEnvConfig(EnvConfig):
         for camera in self.cameras:
             self.features[N.env_pixels_key(camera)] = PolicyFeature(FeatureType.VISUAL, shape)
             self.features_map[N.env_pixels_key(camera)] = N.image_key(camera)
+            if self.depth:
+                depth_shape = (self.image_height, self.image_width, 1)
+                self.features[depth_observation_key(camera)] = PolicyFeature(
+                    FeatureType.VISUAL, depth_shape
+                )
+                self.features_map[depth_observation_key(camera)] = N.depth_image_key(camera)
 
     @property
     def gym_kwargs(self) -> dict:
@@ -72,6 +82,7 @@ class RmbEnvConfig(EnvConfig):
             "image_size": (self.image_width, self.image_height),
             "action_mode": self.action_mode,
             "random_shift": self.random_shift,
+            "depth": self.depth,
             "render_mode": self.render_mode,
             "render_camera": self.cameras[0] if self.cameras else "front",
             "max_episode_steps": self.episode_length,
@@ -85,7 +96,7 @@ class RmbEnvConfig(EnvConfig):
         Async workers start with forkserver (what LeRobot uses); ``make_env`` is a module
         function, so the env factory pickles by reference.
         """
-        factory = functools.partial(make_env, self.task, **self.gym_kwargs)
+        factory = functools.partial(make_lerobot_env, self.task, **self.gym_kwargs)
         if use_async_envs and n_envs > 1:
             vec = gym.vector.AsyncVectorEnv(
                 [factory] * n_envs,
@@ -97,6 +108,43 @@ class RmbEnvConfig(EnvConfig):
                 [factory] * n_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP
             )
         return {self.type: {0: vec}}
+
+
+def depth_observation_key(camera: str) -> str:
+    """``front`` -> ``images.front_depth``, which LeRobot prefixes with ``observation.``."""
+    return N.depth_image_key(camera).removeprefix(OBS_STR + ".")
+
+
+class DepthForLeRobot(gym.ObservationWrapper):
+    """Depth as LeRobotDataset returns it: float32 millimetres, channel first, per camera.
+
+    ``RmbEnv(depth=True)`` puts depth in a nested ``depth`` dict (uint16 mm), which LeRobot's
+    ``preprocess_observation`` drops; a flat array key ``k`` it passes through as float
+    ``observation.<k>``. So each camera becomes ``images.<camera>_depth`` of shape (1, H, W), i.e.
+    ``observation.images.<camera>_depth`` (B, 1, H, W) at the policy: the layout and unit a
+    dataset converted with ``--depth`` decodes to (LeRobot's default ``depth_output_unit="mm"``).
+    """
+
+    def __init__(self, env: gym.Env):
+        super().__init__(env)
+        spaces = dict(env.observation_space.spaces)
+        for camera, space in spaces.pop("depth").spaces.items():
+            spaces[depth_observation_key(camera)] = gym.spaces.Box(
+                0.0, float(space.high.max()), (1, *space.shape), dtype=np.float32
+            )
+        self.observation_space = gym.spaces.Dict(spaces)
+
+    def observation(self, observation: dict) -> dict:
+        observation = dict(observation)
+        for camera, depth_mm in observation.pop("depth").items():
+            observation[depth_observation_key(camera)] = depth_mm[None].astype(np.float32)
+        return observation
+
+
+def make_lerobot_env(task: str, **kwargs) -> gym.Env:
+    """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras)."""
+    env = make_env(task, **kwargs)
+    return DepthForLeRobot(env) if "depth" in env.observation_space.spaces else env
 
 
 def _register(entry: EnvEntry) -> type[RmbEnvConfig]:

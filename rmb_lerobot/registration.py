@@ -17,6 +17,7 @@ ENV_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.envs.lerobot_config",)
 POLICY_CONFIG_MODULES: tuple[str, ...] = (
     "rmb_lerobot.policies_extra.mlp.configuration_mlp",
     "rmb_lerobot.policies_extra.sarnn.configuration_sarnn",
+    "rmb_lerobot.policies_extra.dp3.configuration_dp3",
 )
 
 ENV_TYPE_PREFIX = "rmb_"

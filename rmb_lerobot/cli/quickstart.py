@@ -1,120 +1,214 @@
-"""``rmb-quickstart``: the main job of the README, end to end on this machine.
+"""``rmb-quickstart``: the README's main job, the real pipeline end to end on a CPU.
 
-It collects scripted-expert demonstrations in an RMB simulation env (``rmb-collect``), reads
-the episodes back by random access, switches one to the single-file variant and checks both
-against each other, and prints a summary. (Conversion to LeRobotDataset, training and
-evaluation join this pipeline as they land.)
+1. ``rmb-collect``: scripted-expert demonstrations in an RMB simulation env, as RMB episodes;
+2. ``rmb-convert to-lerobot``: the episodes become one LeRobotDataset v3;
+3. ``lerobot-train``: LeRobot's ACT (no pretrained backbone, small images) on that dataset,
+   with ``--env.type=rmb_ur5e_<task>`` so the policy's inputs are checked against the env;
+4. ``lerobot-eval``: the trained checkpoint in the same env; success rate and videos.
+
+Every stage is the unmodified command-line tool, run as a subprocess and printed first so it can
+be re-run by hand; the defaults fit in about 15 minutes on a 2-core CPU.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import shlex
 import shutil
+import subprocess
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-from tqdm import tqdm
+from rmb_lerobot.envs.registry import entry_for
 
-from rmb_lerobot import keys as K
-from rmb_lerobot.episode import open_episode, switch_format
-
-
-def _size_mb(path: Path) -> float:
-    files = [path] if path.is_file() else [p for p in path.rglob("*") if p.is_file()]
-    return sum(p.stat().st_size for p in files) / 1e6
+# The LeRobot entry points, by their console-script names (what the printed commands show).
+LEROBOT_MODULES = {
+    "lerobot-train": "lerobot.scripts.lerobot_train",
+    "lerobot-eval": "lerobot.scripts.lerobot_eval",
+}
 
 
-def _psnr(a: np.ndarray, b: np.ndarray) -> float:
-    mse = np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2)
-    return float("inf") if mse == 0 else 10 * np.log10(255**2 / mse)
+@dataclass(frozen=True)
+class Stage:
+    """One command of the pipeline: its console-script name and its arguments."""
+
+    name: str
+    args: list[str]
+
+    def argv(self) -> list[str]:
+        """The command to run, with this interpreter (so the venv is used even if not active)."""
+        if self.name in LEROBOT_MODULES:
+            return [sys.executable, "-m", LEROBOT_MODULES[self.name], *self.args]
+        script = Path(sys.executable).with_name(self.name)
+        return [str(script) if script.exists() else self.name, *self.args]
+
+    def __str__(self) -> str:
+        return shlex.join([self.name, *self.args])
 
 
-def collect_demos(env: str, out: Path, episodes: int, cameras, size, workers: int) -> list[Path]:
-    """Record scripted demonstrations (the ``rmb-collect`` pipeline); returns episode paths."""
-    from rmb_lerobot.envs.collect import CollectConfig, collect
-
-    config = CollectConfig(env, out, episodes, cameras=tuple(cameras), image_size=tuple(size))
-    paths, successes = [], 0
-    for result in tqdm(collect(config, workers), total=episodes, desc=f"collect {env}"):
-        successes += result.success
-        if result.path is not None:
-            paths.append(result.path)
-    print(f"collected {len(paths)} episodes of {env}, {successes} successful")
-    return sorted(paths)
+def _list(values: Sequence[str]) -> str:
+    """A list in draccus' command-line syntax: ``[front,hand]``."""
+    return "[" + ",".join(values) + "]"
 
 
-def summarize(path: Path) -> list[str]:
-    lines = [f"{path}  ({_size_mb(path):.2f} MB)"]
-    with open_episode(path) as ep:
-        lines.append(
-            f"  format={ep.format.value} steps={len(ep)} fps={ep.fps:.2f} cameras={ep.camera_names}"
-        )
-        for key in ep:
-            series = ep[key]
-            sample = series[0]
-            lines.append(f"  {key:32s} {tuple(series.shape)!s:22s} {sample.dtype}")
-        for name, value in sorted(ep.attrs.items()):
-            lines.append(f"  @{name} = {value!r}")
+def pipeline(args: argparse.Namespace) -> list[Stage]:
+    """The four commands of the main job, for the options given."""
+    entry = entry_for(args.env)
+    out: Path = args.out
+    width, height = args.image_size
+    repo_id = f"local/rmb_{entry.task}_quickstart"
+    env_args = [
+        f"--env.type={entry.lerobot_type}",
+        f"--env.cameras={_list(args.cameras)}",
+        f"--env.image_width={width}",
+        f"--env.image_height={height}",
+    ]
+    collect = Stage(
+        "rmb-collect",
+        [
+            entry.rmb_env_name,
+            f"--episodes={args.episodes}",
+            f"--out={out / 'rmb'}",
+            "--cameras",
+            *args.cameras,
+            "--image-size",
+            str(width),
+            str(height),
+            "--no-depth",
+            "--success-only",
+            f"--workers={args.workers}",
+            "--overwrite",
+        ],
+    )
+    convert = Stage(
+        "rmb-convert",
+        [
+            "to-lerobot",
+            str(out / "rmb"),
+            f"--repo-id={repo_id}",
+            f"--output={out / 'dataset'}",
+            f"--workers={args.workers}",
+            "--overwrite",
+        ],
+    )
+    train = Stage(
+        "lerobot-train",
+        [
+            f"--dataset.repo_id={repo_id}",
+            f"--dataset.root={out / 'dataset'}",
+            "--policy.type=act",
+            "--policy.pretrained_backbone_weights=null",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            # ACT sized for a CPU and for RMB's short episodes (about 50 steps for Insert).
+            f"--policy.chunk_size={args.chunk_size}",
+            f"--policy.n_action_steps={args.chunk_size // 2}",
+            "--policy.dim_model=256",
+            "--policy.dim_feedforward=1024",
+            "--policy.n_encoder_layers=2",
+            *env_args,
+            "--env_eval_freq=0",  # evaluated once below, with lerobot-eval
+            f"--steps={args.steps}",
+            f"--batch_size={args.batch_size}",
+            f"--save_freq={args.steps}",
+            f"--log_freq={max(1, args.steps // 20)}",
+            "--num_workers=1",
+            f"--seed={args.seed}",
+            f"--output_dir={out / 'train'}",
+            "--wandb.enable=false",
+        ],
+    )
+    evaluate = Stage(
+        "lerobot-eval",
+        [
+            f"--policy.path={checkpoint_dir(out)}",
+            "--policy.device=cpu",
+            *env_args,
+            *([f"--env.episode_length={args.episode_length}"] if args.episode_length else []),
+            f"--eval.n_episodes={args.eval_episodes}",
+            f"--eval.batch_size={min(args.eval_episodes, args.workers)}",
+            f"--eval.use_async_envs={'true' if args.workers > 1 else 'false'}",
+            f"--seed={args.seed + 1000}",  # not the training seed: unseen object shifts
+            f"--output_dir={out / 'eval'}",
+        ],
+    )
+    return [collect, convert, train, evaluate]
+
+
+def checkpoint_dir(out: Path) -> Path:
+    """Where ``lerobot-train`` leaves the final policy (config, weights, processors)."""
+    return out / "train" / "checkpoints" / "last" / "pretrained_model"
+
+
+def run(stage: Stage, index: int, total: int) -> float:
+    """Run one stage with its output shown live; stop the pipeline if it fails."""
+    print(f"\n=== [{index}/{total}] {stage}\n", flush=True)
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
+    start = time.perf_counter()
+    result = subprocess.run(stage.argv(), env=env, check=False)
+    if result.returncode != 0:
+        raise SystemExit(f"rmb-quickstart: {stage.name} failed (exit {result.returncode})")
+    return time.perf_counter() - start
+
+
+def report(out: Path, timings: dict[str, float]) -> list[str]:
+    """The summary: success rate, per-episode outcome, where the dataset, policy and videos are."""
+    info_path = out / "eval" / "eval_info.json"
+    try:
+        info = json.loads(info_path.read_text())
+        overall = info["overall"]
+    except (OSError, KeyError, json.JSONDecodeError) as error:
+        raise SystemExit(f"rmb-quickstart: no evaluation result in {info_path}: {error}") from None
+    successes = [s for task in info.get("per_task", []) for s in task["metrics"]["successes"]]
+    videos = [Path(p) for p in overall.get("video_paths", [])]
+    lines = [
+        "",
+        f"success rate: {overall['pc_success']:.1f} % ({sum(successes)}/{len(successes)} "
+        f"episodes), mean return {overall['avg_sum_reward']:.2f}",
+        f"dataset:      {(out / 'dataset').absolute()}",
+        f"policy:       {checkpoint_dir(out).absolute()}",
+        f"eval:         {info_path.absolute()}",
+    ]
+    if videos:
+        lines.append(f"eval videos:  {videos[0].parent.absolute()} ({len(videos)} files)")
+    timing = ", ".join(f"{name} {seconds:.0f} s" for name, seconds in timings.items())
+    lines.append(f"time:         {timing}; total {sum(timings.values()) / 60:.1f} min")
     return lines
 
 
-def compare(a: Path, b: Path) -> list[str]:
-    """How far two recordings of the same episode are apart, key by key."""
-    lines = [f"{a.name} vs {b.name}"]
-    with open_episode(a) as ea, open_episode(b) as eb:
-        for key in ea:
-            x, y = np.asarray(ea[key][:]), np.asarray(eb[key][:])
-            if K.is_rgb_image_key(key):
-                lines.append(f"  {key:32s} PSNR {_psnr(x, y):.1f} dB")
-            elif K.is_depth_image_key(key):
-                err = np.abs(x.astype(np.float64) - y) * 1000
-                lines.append(f"  {key:32s} max |error| {err.max():.2f} mm")
-            elif not np.array_equal(x, y):
-                raise SystemExit(f"low-dimensional key {key!r} differs between {a} and {b}")
-        lines.append("  low-dimensional keys and attributes: identical")
-    return lines
-
-
-def random_access_ms(path: Path, key: str, reads: int = 10) -> float:
-    rng = np.random.default_rng(0)
-    with open_episode(path) as ep:
-        series = ep[key]
-        start = time.perf_counter()
-        for i in rng.integers(0, len(ep), reads):
-            series[int(i)]
-        return (time.perf_counter() - start) / reads * 1000
+def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="rmb-quickstart", description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("outputs/quickstart"))
+    parser.add_argument("--env", default="insert", help="RMB env (short name, RMB name, type)")
+    parser.add_argument("--episodes", type=int, default=30, help="demonstrations to collect")
+    parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
+    parser.add_argument("--image-size", nargs=2, type=int, default=[64, 64], metavar=("W", "H"))
+    parser.add_argument("--steps", type=int, default=1500, help="training steps")
+    parser.add_argument("--batch-size", type=int, default=16)
+    parser.add_argument("--chunk-size", type=int, default=20, help="ACT action chunk length")
+    parser.add_argument("--eval-episodes", type=int, default=12)
+    parser.add_argument(
+        "--episode-length", type=int, default=None, help="eval step limit (default: the task's)"
+    )
+    parser.add_argument("--workers", type=int, default=2, help="processes for collect/convert/eval")
+    parser.add_argument("--seed", type=int, default=1)
+    return parser.parse_args(argv)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="rmb-quickstart", description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("outputs/quickstart"))
-    parser.add_argument("--env", default="MujocoUR5eInsert")
-    parser.add_argument("--episodes", type=int, default=4)
-    parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
-    parser.add_argument("--image-size", nargs=2, type=int, default=[128, 128], metavar=("W", "H"))
-    args = parser.parse_args(argv)
-
-    out: Path = args.out
-    if out.exists():
-        shutil.rmtree(out)
-    start = time.perf_counter()
-    episodes = collect_demos(
-        args.env, out / "rmb", args.episodes, args.cameras, args.image_size, args.workers
-    )
-    if not episodes:
-        print("no episodes were collected", file=sys.stderr)
-        return 1
-    first = episodes[0]
-    switched = switch_format(first, out / "switched" / f"{first.stem}.hdf5")
-    report = summarize(first) + compare(first, switched)
-    key = K.depth_image_key(args.cameras[0])
-    report.append(f"random-access read of one {key} frame: {random_access_ms(first, key):.1f} ms")
-    print("\n".join(report))
-    print(f"\nOK in {time.perf_counter() - start:.0f} s: episodes in {(out / 'rmb').resolve()}")
+    args = parse_args(argv)
+    stages = pipeline(args)
+    if args.out.exists():
+        shutil.rmtree(args.out)  # a fresh run: lerobot-train refuses an existing output_dir
+    timings = {}
+    for index, stage in enumerate(stages, start=1):
+        timings[stage.name] = run(stage, index, len(stages))
+    print("\n".join(report(args.out, timings)))
     return 0
 
 

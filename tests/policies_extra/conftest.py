@@ -128,10 +128,61 @@ def run_cli(module: str, args: list[str], cwd: Path) -> subprocess.CompletedProc
 
 
 @pytest.fixture
-def train_and_eval(tiny_dataset, tmp_path):
-    """``lerobot-train`` a few steps on the tiny dataset, then ``lerobot-eval`` the checkpoint."""
+def train_and_eval(tiny_dataset, train_and_eval_on):
+    """``lerobot-train`` a few steps on the tiny dataset, then ``lerobot-eval`` the checkpoint
+    on Insert's 32x32 front camera; returns the eval info."""
 
     def _run(policy_type: str, policy_args: list[str]) -> dict:
+        result = train_and_eval_on(tiny_dataset, policy_type, policy_args, TINY_ENV_ARGS)
+        assert result["config"]["type"] == policy_type
+        return result["eval"]
+
+    return _run
+
+
+TINY_ENV_ARGS = ["--env.cameras=[front]", "--env.image_width=32", "--env.image_height=32"]
+
+
+# ------------------------------------------------------------- expert data with depth (DP3)
+DEPTH_SIZE = 32  # square images of the expert dataset and of the env it is evaluated on
+DEPTH_WORLDS = (1, 4)  # episode i is world DEPTH_WORLDS[i], reset with seed i (rmb-collect)
+
+
+@pytest.fixture(scope="session")
+def expert_depth_dataset(tmp_path_factory) -> Path:
+    """Two Insert demonstrations by the scripted expert (front camera, RGB + depth), converted
+    as ``rmb-convert to-lerobot --depth`` does: depth is ``observation.images.front_depth``."""
+    from rmb_lerobot.converters import ConvertOptions, to_lerobot
+    from rmb_lerobot.envs.collect import CollectConfig, collect
+
+    demos = tmp_path_factory.mktemp("expert_demos")
+    config = CollectConfig(
+        "insert",
+        demos,
+        episodes=len(DEPTH_WORLDS),
+        world_idx=DEPTH_WORLDS,
+        cameras=("front",),
+        image_size=(DEPTH_SIZE, DEPTH_SIZE),
+    )
+    assert all(result.success for result in collect(config))
+    root = tmp_path_factory.mktemp("dataset") / "insert_depth"
+    to_lerobot(
+        [demos],
+        output=root,
+        options=ConvertOptions(depth=True),
+        video_codec="h264",
+        progress=False,
+    )
+    return root
+
+
+@pytest.fixture
+def train_and_eval_on(tmp_path):
+    """``lerobot-train`` a few steps on ``dataset``, then ``lerobot-eval`` it on Insert with
+    extra ``env_args`` (e.g. ``--env.depth=true``); returns the checkpoint's config and the
+    eval info (``{"config": ..., "eval": ...}``)."""
+
+    def _run(dataset: Path, policy_type: str, policy_args: list[str], env_args: list[str]) -> dict:
         out = tmp_path / "train"
         train = run_cli(
             "lerobot_train",
@@ -140,8 +191,8 @@ def train_and_eval(tiny_dataset, tmp_path):
                 *policy_args,
                 "--policy.device=cpu",
                 "--policy.push_to_hub=false",
-                "--dataset.repo_id=local/tiny",
-                f"--dataset.root={tiny_dataset}",
+                f"--dataset.repo_id=local/{dataset.name}",
+                f"--dataset.root={dataset}",
                 f"--output_dir={out}",
                 "--steps=3",
                 "--batch_size=2",
@@ -154,17 +205,13 @@ def train_and_eval(tiny_dataset, tmp_path):
         )
         assert train.returncode == 0, train.stderr[-3000:]
         checkpoint = out / "checkpoints" / "last" / "pretrained_model"
-        config = json.loads((checkpoint / "config.json").read_text())
-        assert config["type"] == policy_type
         evaluation = run_cli(
             "lerobot_eval",
             [
                 f"--policy.path={checkpoint}",
                 "--policy.device=cpu",
                 "--env.type=rmb_ur5e_insert",
-                "--env.cameras=[front]",
-                "--env.image_width=32",
-                "--env.image_height=32",
+                *env_args,
                 "--env.episode_length=5",
                 "--eval.n_episodes=1",
                 "--eval.batch_size=1",
@@ -173,6 +220,9 @@ def train_and_eval(tiny_dataset, tmp_path):
             tmp_path,
         )
         assert evaluation.returncode == 0, evaluation.stderr[-3000:]
-        return json.loads((tmp_path / "eval" / "eval_info.json").read_text())
+        return {
+            "config": json.loads((checkpoint / "config.json").read_text()),
+            "eval": json.loads((tmp_path / "eval" / "eval_info.json").read_text()),
+        }
 
     return _run

@@ -1,0 +1,198 @@
+"""3D Diffusion Policy (DP3) on LeRobot's policy API.
+
+Architecture as Ze et al. (RSS 2024) / the DP3 reference code: per observation frame, a
+PointNet (shared per-point MLP with LayerNorm, max-pool over points, projection to 64 + LayerNorm)
+encodes the point cloud and an MLP the state; the features of the ``n_obs_steps`` frames are
+the global condition (FiLM) of a 1-D convolutional U-Net that denoises the action chunk, trained
+and sampled with diffusers' DDIM scheduler. The U-Net is LeRobot's ``DiffusionConditionalUnet1d``
+(the Chi et al. network DP3 builds on), fed with this policy's config.
+
+Point clouds are built from the depth feature inside the policy (see :mod:`.point_cloud`), so
+training batches, ``select_action`` and a reloaded checkpoint all start from the same depth
+input; LeRobot's processors only normalise state and action.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+
+import torch
+import torch.nn.functional as F
+from diffusers.schedulers.scheduling_ddim import DDIMScheduler
+from lerobot.policies.diffusion.modeling_diffusion import DiffusionConditionalUnet1d
+from lerobot.policies.pretrained import PreTrainedPolicy
+from lerobot.policies.utils import populate_queues
+from lerobot.utils.constants import ACTION, OBS_STATE
+from torch import Tensor, nn
+
+from .configuration_dp3 import DP3Config
+from .point_cloud import DepthPointClouds, resolve_camera_fovy
+
+POINT_CLOUD = "observation.point_cloud"  # (B, n_obs_steps, num_points, 3 or 6), made here
+
+
+class DP3Policy(PreTrainedPolicy):
+    """Point cloud + state -> chunk of actions, ``n_action_steps`` executed per prediction."""
+
+    config_class = DP3Config
+    name = "dp3"
+
+    def __init__(self, config: DP3Config, dataset_meta=None, **kwargs):
+        """``dataset_meta`` (from ``make_policy`` when training) supplies the camera's fovy."""
+        super().__init__(config)
+        config.validate_features()
+        resolve_camera_fovy(config, dataset_meta)
+        self.config = config
+        self.point_clouds = DepthPointClouds(config)
+        self.model = DP3Model(config)
+        self.reset()
+
+    @property
+    def observation_keys(self) -> tuple[str, ...]:
+        """The inputs DP3 reads: state, depth and (``use_pc_color``) the camera's RGB."""
+        keys = (OBS_STATE, self.config.depth_key, self.config.color_key)
+        return tuple(k for k in keys if k is not None)
+
+    def get_optim_params(self) -> list[nn.Parameter]:
+        return [p for p in self.parameters() if p.requires_grad]
+
+    def reset(self) -> None:
+        """Start an episode: forget the observation history and the queued actions."""
+        self._queues = {key: deque(maxlen=self.config.n_obs_steps) for key in self.observation_keys}
+        self._queues[ACTION] = deque(maxlen=self.config.n_action_steps)
+
+    def model_inputs(self, batch: dict[str, Tensor]) -> tuple[Tensor, Tensor]:
+        """State (B, T, S) and point clouds (B, T, P, C) of observation windows (B, T, ...)."""
+        self._check_inputs(batch)
+        cfg = self.config
+        rgb = batch[cfg.color_key] if cfg.color_key is not None else None
+        return batch[OBS_STATE], self.point_clouds(batch[cfg.depth_key], rgb)
+
+    def _check_inputs(self, batch: dict[str, Tensor]) -> None:
+        missing = [k for k in self.observation_keys if k not in batch]
+        if missing:
+            raise KeyError(
+                f"DP3 needs {missing}: RMB env types deliver depth with --env.depth=true"
+            )
+
+    def _window_from_history(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
+        """Append one observation (B, ...) to the history; the last ``n_obs_steps`` frames."""
+        self._check_inputs(batch)
+        self._queues = populate_queues(self._queues, {k: batch[k] for k in self.observation_keys})
+        return {k: torch.stack(list(self._queues[k]), dim=1) for k in self.observation_keys}
+
+    @torch.no_grad()
+    def predict_action_chunk(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
+        """(B, n_action_steps, A) actions from the current step on.
+
+        ``batch`` is either one observation (B, ...), appended to the history kept since
+        :meth:`reset`, or a window (B, n_obs_steps, ...) as the dataset gives.
+        """
+        self.eval()
+        if batch[OBS_STATE].ndim == 2:
+            batch = self._window_from_history(batch)
+        return self.model.generate_actions(*self.model_inputs(batch), noise=noise)
+
+    @torch.no_grad()
+    def select_action(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
+        """Next action (B, A): a new chunk every ``n_action_steps`` calls, queued in between."""
+        window = self._window_from_history(batch)
+        if not self._queues[ACTION]:
+            self.eval()
+            chunk = self.model.generate_actions(*self.model_inputs(window), noise=noise)
+            self._queues[ACTION].extend(chunk.transpose(0, 1))
+        return self._queues[ACTION].popleft()
+
+    def forward(self, batch: dict[str, Tensor]) -> tuple[Tensor, dict]:
+        """Denoising loss of a batch of windows: observations (B, n_obs_steps, ...), ``action``
+        (B, horizon, A) and ``action_is_pad`` (B, horizon)."""
+        if batch[OBS_STATE].ndim == 2:  # n_obs_steps == 1 without a time axis
+            batch = {**batch, **{k: batch[k].unsqueeze(1) for k in self.observation_keys}}
+        state, cloud = self.model_inputs(batch)
+        loss = self.model.compute_loss(state, cloud, batch[ACTION], batch.get(f"{ACTION}_is_pad"))
+        return loss, {}
+
+
+class PointNetEncoder(nn.Module):
+    """DP3's PointNetEncoderXYZ: (..., P, C) points -> (..., out_dim) feature."""
+
+    def __init__(self, in_channels: int, channels: tuple[int, ...], out_dim: int):
+        super().__init__()
+        layers: list[nn.Module] = []
+        for c_in, c_out in itertools.pairwise((in_channels, *channels)):
+            layers += [nn.Linear(c_in, c_out), nn.LayerNorm(c_out), nn.ReLU()]
+        self.mlp = nn.Sequential(*layers)
+        self.projection = nn.Sequential(nn.Linear(channels[-1], out_dim), nn.LayerNorm(out_dim))
+
+    def forward(self, points: Tensor) -> Tensor:
+        return self.projection(self.mlp(points).amax(dim=-2))
+
+
+def mlp(in_dim: int, dims: tuple[int, ...]) -> nn.Sequential:
+    """Linear layers with ReLU between them (none after the last), as DP3's state MLP."""
+    layers: list[nn.Module] = []
+    for c_in, c_out in itertools.pairwise((in_dim, *dims)):
+        layers += [nn.Linear(c_in, c_out), nn.ReLU()]
+    return nn.Sequential(*layers[:-1])
+
+
+class DP3Model(nn.Module):
+    """Observation encoders, the conditional U-Net and the DDIM noise scheduler."""
+
+    def __init__(self, config: DP3Config):
+        super().__init__()
+        self.config = config
+        self.point_encoder = PointNetEncoder(
+            config.point_dim, tuple(config.encoder_channels), config.encoder_output_dim
+        )
+        self.state_encoder = mlp(config.robot_state_feature.shape[0], tuple(config.state_mlp_dims))
+        cond_dim = (config.encoder_output_dim + config.state_mlp_dims[-1]) * config.n_obs_steps
+        self.unet = DiffusionConditionalUnet1d(config, global_cond_dim=cond_dim)
+        self.noise_scheduler = DDIMScheduler(
+            num_train_timesteps=config.num_train_timesteps,
+            beta_start=config.beta_start,
+            beta_end=config.beta_end,
+            beta_schedule=config.beta_schedule,
+            clip_sample=config.clip_sample,
+            clip_sample_range=config.clip_sample_range,
+            set_alpha_to_one=True,
+            steps_offset=0,
+            prediction_type=config.prediction_type,
+        )
+
+    def global_condition(self, state: Tensor, cloud: Tensor) -> Tensor:
+        """(B, T, S) states and (B, T, P, C) clouds -> (B, T * (64 + state feature))."""
+        features = torch.cat([self.point_encoder(cloud), self.state_encoder(state)], dim=-1)
+        return features.flatten(start_dim=1)
+
+    def compute_loss(
+        self, state: Tensor, cloud: Tensor, actions: Tensor, is_pad: Tensor | None = None
+    ) -> Tensor:
+        cond = self.global_condition(state, cloud)
+        noise = torch.randn_like(actions)
+        timesteps = torch.randint(
+            0, self.config.num_train_timesteps, (actions.shape[0],), device=actions.device
+        )
+        noisy = self.noise_scheduler.add_noise(actions, noise, timesteps)
+        pred = self.unet(noisy, timesteps, global_cond=cond)
+        target = actions if self.config.prediction_type == "sample" else noise
+        loss = F.mse_loss(pred, target, reduction="none")
+        if self.config.do_mask_loss_for_padding and is_pad is not None:
+            valid = (~is_pad).unsqueeze(-1).expand_as(loss)
+            return (loss * valid).sum() / valid.sum().clamp_min(1)
+        return loss.mean()
+
+    def generate_actions(self, state: Tensor, cloud: Tensor, noise: Tensor | None = None) -> Tensor:
+        """DDIM sampling of a horizon; returns its ``n_action_steps`` from the current frame."""
+        cfg = self.config
+        cond = self.global_condition(state, cloud)
+        shape = (state.shape[0], cfg.horizon, cfg.action_feature.shape[0])
+        sample = noise if noise is not None else torch.randn(shape, device=state.device)
+        self.noise_scheduler.set_timesteps(cfg.num_inference_steps)
+        for t in self.noise_scheduler.timesteps:
+            steps = torch.full((shape[0],), int(t), dtype=torch.long, device=state.device)
+            output = self.unet(sample, steps, global_cond=cond)
+            sample = self.noise_scheduler.step(output, t, sample).prev_sample
+        start = cfg.n_obs_steps - 1
+        return sample[:, start : start + cfg.n_action_steps]

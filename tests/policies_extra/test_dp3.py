@@ -1,0 +1,267 @@
+"""DP3 as a LeRobot plugin: point clouds from depth, training, rollout, persistence, CLIs.
+
+The env/dataset test checks what the policy relies on: an RMB env type with ``--env.depth=true``
+hands the policy the same depth (key, layout, unit) as the converted dataset it was trained on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs.policies import PreTrainedConfig
+from lerobot.configs.types import FeatureType, NormalizationMode, PolicyFeature
+from lerobot.datasets import LeRobotDataset, LeRobotDatasetMetadata
+from lerobot.envs.utils import preprocess_observation
+from lerobot.policies.factory import get_policy_class, make_policy, make_pre_post_processors
+from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
+from rmb_lerobot.policies_extra.dp3 import DP3Config, DP3Policy
+from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds
+
+from rmb_lerobot.registration import registered_policy_types
+
+STATE_DIM = ACTION_DIM = 7
+SIZE = 32
+FRONT = "observation.images.front"
+DEPTH = "observation.images.front_depth"
+TINY = {
+    "num_points": 64,
+    "encoder_channels": (16, 32),
+    "encoder_output_dim": 16,
+    "state_mlp_dims": (16, 16),
+    "down_dims": (32, 64),
+    "diffusion_step_embed_dim": 16,
+    "horizon": 8,
+    "n_action_steps": 4,
+    "camera_fovy": 45.0,
+    "device": "cpu",
+}
+
+
+def features(color: bool = False) -> tuple[dict, dict]:
+    inputs = {
+        "observation.state": PolicyFeature(FeatureType.STATE, (STATE_DIM,)),
+        DEPTH: PolicyFeature(FeatureType.VISUAL, (1, SIZE, SIZE)),
+    }
+    if color:
+        inputs[FRONT] = PolicyFeature(FeatureType.VISUAL, (3, SIZE, SIZE))
+    return inputs, {"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))}
+
+
+def make_dp3(color: bool = False, **overrides) -> DP3Policy:
+    inputs, outputs = features(color)
+    torch.manual_seed(0)
+    config = DP3Config(input_features=inputs, output_features=outputs, **TINY | overrides)
+    return DP3Policy(config)
+
+
+def box_depth_mm(batch_shape: tuple[int, ...], seed: int = 0) -> torch.Tensor:
+    """A table at 0.8 m with a box at 0.6 m whose position depends on ``seed``; wall at 3 m."""
+    g = torch.Generator().manual_seed(seed)
+    depth = torch.full((*batch_shape, 1, SIZE, SIZE), 800.0)
+    depth[..., : SIZE // 4, :] = 3000.0
+    row, col = (int(v) for v in torch.randint(SIZE // 4, SIZE - 8, (2,), generator=g))
+    depth[..., row : row + 8, col : col + 8] = 600.0
+    return depth
+
+
+def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
+    g = torch.Generator().manual_seed(seed)
+    return {
+        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
+        DEPTH: box_depth_mm((batch,), seed),
+    }
+
+
+def windows(batch: int, policy: DP3Policy) -> dict[str, torch.Tensor]:
+    """Training windows whose actions follow the box position (learnable from the cloud)."""
+    cfg = policy.config
+    depth = torch.cat([box_depth_mm((1, cfg.n_obs_steps), seed=i) for i in range(batch)])
+    box = (depth[:, -1, 0] < 700).nonzero()[:, 1:].float().view(batch, -1, 2).mean(1) / SIZE
+    action = box.repeat(1, 4)[:, :ACTION_DIM, None].transpose(1, 2).repeat(1, cfg.horizon, 1)
+    return {
+        "observation.state": torch.zeros(batch, cfg.n_obs_steps, STATE_DIM),
+        DEPTH: depth,
+        "action": 2 * action - 1,
+        "action_is_pad": torch.zeros(batch, cfg.horizon, dtype=torch.bool),
+    }
+
+
+def test_dp3_is_our_policy_type_and_found_by_lerobots_convention():
+    assert "dp3" in registered_policy_types()
+    assert PreTrainedConfig.get_choice_class("dp3") is DP3Config
+    assert get_policy_class("dp3") is DP3Policy
+
+
+def test_config_windows_defaults_and_checks():
+    config = DP3Config(device="cpu")
+    # The current frame and the previous one; actions from the previous frame on.
+    assert config.observation_delta_indices == [-1, 0]
+    assert config.action_delta_indices == list(range(-1, 15))
+    assert (config.num_points, config.n_action_steps, config.num_inference_steps) == (512, 8, 10)
+    with pytest.raises(ValueError, match="IDENTITY"):
+        DP3Config(normalization_mapping={"VISUAL": NormalizationMode.MEAN_STD})
+    with pytest.raises(ValueError, match="n_action_steps"):
+        DP3Config(horizon=8, n_action_steps=8)
+    inputs, outputs = features(color=True)
+    config = DP3Config(input_features=inputs, output_features=outputs, use_pc_color=True)
+    assert (config.depth_key, config.color_key, config.point_dim) == (DEPTH, FRONT, 6)
+    rgb_only = {key: ft for key, ft in inputs.items() if key != DEPTH}
+    rgb_only = DP3Config(input_features=rgb_only, output_features=outputs, device="cpu")
+    with pytest.raises(ValueError, match="exactly one depth camera"):
+        rgb_only.validate_features()
+
+
+def test_point_clouds_are_metric_cropped_and_fixed_size():
+    config = DP3Config(camera_fovy=60.0, num_points=128, crop_max=(2, 2, 1.0), device="cpu")
+    clouds = DepthPointClouds(config)
+    depth = box_depth_mm((2, 3))
+    cloud = clouds(depth)
+    assert cloud.shape == (2, 3, 128, 3) and cloud.dtype == torch.float32
+    # The 3 m wall is cropped away; the table and the box remain, in metres.
+    z = cloud[..., 2].unique()
+    torch.testing.assert_close(z, torch.tensor([0.6, 0.8]))
+    # Pinhole geometry: the widest table point is at half the field of view horizontally.
+    half_width = 0.8 * math.tan(math.radians(30.0))  # fovy 60 deg, square image
+    assert cloud[..., 0].min() == pytest.approx(-half_width, rel=1e-5)
+    # Same frame, same cloud (memoised by content).
+    assert torch.equal(clouds(depth[:1, :1]), cloud[:1, :1])
+
+
+def test_colored_points_carry_the_rgb_of_their_pixel():
+    config = DP3Config(camera_fovy=45.0, num_points=32, use_pc_color=True, device="cpu")
+    rgb = torch.zeros(1, 3, SIZE, SIZE)
+    rgb[:, 0] = 1.0  # red table and box
+    cloud = DepthPointClouds(config)(box_depth_mm((1,)), rgb)
+    assert cloud.shape == (1, 32, 6)
+    torch.testing.assert_close(cloud[0, :, 3:], torch.tensor([1.0, 0, 0]).expand(32, 3))
+
+
+def test_shapes_and_a_training_step():
+    policy = make_dp3()
+    batch = windows(4, policy)
+    state, cloud = policy.model_inputs(batch)
+    assert state.shape == (4, 2, STATE_DIM) and cloud.shape == (4, 2, 64, 3)
+    assert policy.model.global_condition(state, cloud).shape == (4, 2 * (16 + 16))
+
+    params = policy.get_optim_params()
+    assert isinstance(params, list) and all(isinstance(p, torch.nn.Parameter) for p in params)
+    policy.train()
+    loss, _ = policy.forward(batch)
+    loss.backward()
+    torch.optim.AdamW(params).step()
+    assert torch.isfinite(loss)
+    assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
+
+
+def test_overfits_a_tiny_batch():
+    policy = make_dp3()
+    batch = windows(8, policy)
+    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
+    policy.train()
+    torch.manual_seed(0)
+    losses = []
+    for _ in range(60):
+        loss, _ = policy.forward(batch)
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        losses.append(loss.item())
+    first, last = np.mean(losses[:5]), np.mean(losses[-5:])
+    assert last < 0.3 * first, losses
+
+
+def test_select_action_after_reset_executes_one_chunk_then_replans():
+    policy = make_dp3()
+    obs = observation(2)
+    noise = torch.randn(2, policy.config.horizon, ACTION_DIM)
+    policy.reset()
+    chunk = policy.predict_action_chunk(obs, noise=noise)
+    assert chunk.shape == (2, 4, ACTION_DIM)
+
+    policy.reset()
+    actions = [policy.select_action(obs, noise=noise) for _ in range(4)]
+    torch.testing.assert_close(torch.stack(actions, dim=1), chunk)
+    # The queue is empty: the next call plans again, now from two different frames.
+    other = observation(2, seed=5)
+    assert not torch.allclose(policy.select_action(other, noise=noise), actions[0])
+    with pytest.raises(KeyError, match=r"--env\.depth=true"):
+        policy.select_action({"observation.state": other["observation.state"]})
+
+
+def test_save_load_round_trip_gives_identical_actions(tmp_path):
+    policy = make_dp3(color=True, use_pc_color=True)
+    stats = {
+        "observation.state": {"min": -torch.ones(STATE_DIM), "max": torch.ones(STATE_DIM)},
+        "action": {"min": torch.zeros(ACTION_DIM), "max": torch.full((ACTION_DIM,), 2.0)},
+    }
+    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
+    for part in (policy, pre, post):
+        part.save_pretrained(tmp_path)
+
+    config = PreTrainedConfig.from_pretrained(tmp_path)
+    assert config.type == "dp3" and config.camera_fovy == 45.0 and config.use_pc_color
+    loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+    pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
+
+    obs = {**observation(1), FRONT: torch.rand(1, 3, SIZE, SIZE)}
+    noise = torch.randn(1, config.horizon, ACTION_DIM)
+    policy.reset()
+    loaded.reset()
+    expected = post(policy.select_action(pre(obs), noise=noise))
+    torch.testing.assert_close(post2(loaded.select_action(pre2(obs), noise=noise)), expected)
+
+
+def test_fovy_comes_from_the_converted_dataset(expert_depth_dataset):
+    meta = LeRobotDatasetMetadata("local/insert_depth", root=expert_depth_dataset)
+    assert meta.depth_keys == [DEPTH]
+    policy = make_policy(DP3Config(device="cpu", num_points=32), ds_meta=meta)
+    assert policy.config.camera_fovy == 45.0  # meta/rmb.json: front_depth_image_fovy
+    with pytest.raises(ValueError, match=r"records 45\.0"):
+        make_policy(DP3Config(device="cpu", camera_fovy=62.0), ds_meta=meta)
+
+
+def test_env_depth_is_the_datasets_depth(expert_depth_dataset):
+    """What lerobot-eval feeds the policy equals what lerobot-train fed it (within the codec)."""
+    dataset = LeRobotDataset("local/insert_depth", root=expert_depth_dataset)
+    first = dataset[0]  # episode 0: world 1, reset with seed 0 (rmb-collect's order)
+    env_config = ENV_CONFIGS["rmb_ur5e_insert"](
+        cameras=["front"], image_width=SIZE, image_height=SIZE, depth=True
+    )
+    assert env_config.features_map["images.front_depth"] == DEPTH
+    vec = env_config.create_envs(n_envs=1)["rmb_ur5e_insert"][0]
+    try:
+        raw, _ = vec.reset(seed=0, options={"world_idx": 1})
+    finally:
+        vec.close()
+    env_depth = preprocess_observation(raw)[DEPTH]
+
+    train_depth = first[DEPTH]
+    assert env_depth.shape == (1, *train_depth.shape) == (1, 1, SIZE, SIZE)
+    assert env_depth.dtype == train_depth.dtype == torch.float32
+    assert 500 < train_depth.median() < 3000  # millimetres, both
+    # LeRobot's 12-bit log depth codec: steps of ~2 mm at 3.5 m, rounded to the nearest mm.
+    assert (env_depth[0] - train_depth).abs().max() <= 2.0
+
+
+def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on):
+    result = train_and_eval_on(
+        expert_depth_dataset,
+        "dp3",
+        [
+            "--policy.num_points=64",
+            "--policy.down_dims=[32,64]",
+            "--policy.horizon=8",
+            "--policy.n_action_steps=4",
+        ],
+        [
+            "--env.cameras=[front]",
+            f"--env.image_width={SIZE}",
+            f"--env.image_height={SIZE}",
+            "--env.depth=true",  # delivers observation.images.front_depth
+        ],
+    )
+    assert result["config"]["type"] == "dp3" and result["config"]["camera_fovy"] == 45.0
+    assert result["eval"]["overall"]["n_episodes"] == 1
