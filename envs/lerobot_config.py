@@ -54,6 +54,8 @@ class RmbEnvConfig(EnvConfig):
     render_mode: str = "rgb_array"
     # Also deliver each camera's depth as observation.images.<camera>_depth (see DepthForLeRobot).
     depth: bool = False
+    # Evaluate in one world (0..5) only; None: each episode's world is drawn from its seed.
+    world_idx: int | None = None
 
     def __post_init__(self) -> None:
         layout = K.UR5E_LAYOUT
@@ -96,7 +98,9 @@ class RmbEnvConfig(EnvConfig):
         Async workers start with forkserver (what LeRobot uses); ``make_env`` is a module
         function, so the env factory pickles by reference.
         """
-        factory = functools.partial(make_lerobot_env, self.task, **self.gym_kwargs)
+        factory = functools.partial(
+            make_lerobot_env, self.task, world_idx=self.world_idx, **self.gym_kwargs
+        )
         if use_async_envs and n_envs > 1:
             vec = gym.vector.AsyncVectorEnv(
                 [factory] * n_envs,
@@ -141,10 +145,24 @@ class DepthForLeRobot(gym.ObservationWrapper):
         return observation
 
 
-def make_lerobot_env(task: str, **kwargs) -> gym.Env:
-    """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras)."""
+class FixedWorld(gym.Wrapper):
+    """Every episode in one world: ``reset`` adds ``world_idx`` unless the caller set it."""
+
+    def __init__(self, env: gym.Env, world_idx: int):
+        super().__init__(env)
+        self.world_idx = int(world_idx)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        return self.env.reset(seed=seed, options={"world_idx": self.world_idx, **(options or {})})
+
+
+def make_lerobot_env(task: str, world_idx: int | None = None, **kwargs) -> gym.Env:
+    """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras), in
+    one world if ``world_idx`` is given."""
     env = make_env(task, **kwargs)
-    return DepthForLeRobot(env) if "depth" in env.observation_space.spaces else env
+    if "depth" in env.observation_space.spaces:
+        env = DepthForLeRobot(env)
+    return env if world_idx is None else FixedWorld(env, world_idx)
 
 
 def _register(entry: EnvEntry) -> type[RmbEnvConfig]:

@@ -33,6 +33,21 @@ LEROBOT_MODULES = {
 }
 
 
+# LeRobot's ACT sized for a CPU and for RMB's short episodes (about 50 steps for Insert): no
+# pretrained backbone (nothing is downloaded), a smaller transformer, 20-step action chunks
+# replanned every 10 steps, and a learning rate for short runs (ACT's default 1e-5 is for
+# 100k-step trainings).
+ACT_CPU_ARGS = (
+    "--policy.pretrained_backbone_weights=null",
+    "--policy.chunk_size=20",
+    "--policy.n_action_steps=10",
+    "--policy.dim_model=256",
+    "--policy.dim_feedforward=1024",
+    "--policy.n_encoder_layers=2",
+    "--policy.optimizer_lr=1e-4",
+)
+
+
 @dataclass(frozen=True)
 class Stage:
     """One command of the pipeline: its console-script name and its arguments."""
@@ -102,15 +117,9 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
             f"--dataset.repo_id={repo_id}",
             f"--dataset.root={out / 'dataset'}",
             "--policy.type=act",
-            "--policy.pretrained_backbone_weights=null",
+            *ACT_CPU_ARGS,
             "--policy.device=cpu",
             "--policy.push_to_hub=false",
-            # ACT sized for a CPU and for RMB's short episodes (about 50 steps for Insert).
-            f"--policy.chunk_size={args.chunk_size}",
-            f"--policy.n_action_steps={args.chunk_size // 2}",
-            "--policy.dim_model=256",
-            "--policy.dim_feedforward=1024",
-            "--policy.n_encoder_layers=2",
             *env_args,
             "--env_eval_freq=0",  # evaluated once below, with lerobot-eval
             f"--steps={args.steps}",
@@ -190,7 +199,6 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--image-size", nargs=2, type=int, default=[64, 64], metavar=("W", "H"))
     parser.add_argument("--steps", type=int, default=1500, help="training steps")
     parser.add_argument("--batch-size", type=int, default=16)
-    parser.add_argument("--chunk-size", type=int, default=20, help="ACT action chunk length")
     parser.add_argument("--eval-episodes", type=int, default=12)
     parser.add_argument(
         "--episode-length", type=int, default=None, help="eval step limit (default: the task's)"

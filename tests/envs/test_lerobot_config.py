@@ -57,6 +57,19 @@ def test_sync_vector_env_matches_the_features():
         vec.close()
 
 
+def test_world_idx_evaluates_every_episode_in_that_world():
+    config = ENV_CONFIGS["rmb_ur5e_insert"](cameras=[], world_idx=4)
+    vec = config.create_envs(n_envs=2)["rmb_ur5e_insert"][0]
+    try:
+        for seed in (0, 7):
+            _, info = vec.reset(seed=seed)
+            assert list(info["world_idx"]) == [4, 4]
+        _, info = vec.reset(seed=0, options={"world_idx": 2})  # an explicit option still wins
+        assert list(info["world_idx"]) == [2, 2]
+    finally:
+        vec.close()
+
+
 def test_async_vector_env_uses_forkserver_workers():
     config = ENV_CONFIGS["rmb_ur5e_door"](cameras=[], episode_length=5)
     vec = config.create_envs(n_envs=2, use_async_envs=True)["rmb_ur5e_door"][0]
