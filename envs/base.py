@@ -8,7 +8,9 @@ gripper, end-effector and wrench keys, images) is available to recorders through
 
 Control follows RMB: timestep 0.004 s, ``frame_skip`` 8 (31.25 Hz), position-controlled joints.
 Action modes: ``joint`` (7 absolute targets: 6 arm joints + gripper 0..255), ``eef_abs``
-(absolute eef pose (7) in the robot root frame + gripper) and ``eef_rel`` (RMB's relative eef
+(absolute eef pose in the robot root frame as the 9 numbers policies use, position + 6-D
+rotation, which is what a dataset converted with ``command_eef_pose`` as action holds, + gripper)
+and ``eef_rel`` (RMB's relative eef
 pose (6) applied to the previous command pose + gripper), the eef modes solved by damped
 least-squares IK on the model.
 """
@@ -29,7 +31,7 @@ from rmb_lerobot.envs.tasks.base import Task
 
 from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth_base import metres_to_mm
-from rmb_lerobot.pose import POSE_DIM, REL_POSE_DIM, apply_relative_pose
+from rmb_lerobot.pose import POLICY_POSE_DIM, REL_POSE_DIM, apply_relative_pose, policy_to_pose
 
 ACTION_MODES = ("joint", "eef_abs", "eef_rel")
 FRAME_SKIP = 8
@@ -207,8 +209,8 @@ class RmbEnv(gym.Env):
             lower = np.where(np.isfinite(lower), lower, -2 * np.pi)
             upper = np.where(np.isfinite(upper), upper, 2 * np.pi)
         elif self.action_mode == "eef_abs":
-            lower = np.array([*[-EEF_POS_BOUND] * 3, *[-1.0] * 4, g_lo])
-            upper = np.array([*[EEF_POS_BOUND] * 3, *[1.0] * 4, g_hi])
+            lower = np.array([*[-EEF_POS_BOUND] * 3, *[-1.0] * 6, g_lo])
+            upper = np.array([*[EEF_POS_BOUND] * 3, *[1.0] * 6, g_hi])
         else:
             lower = np.array([*[-EEF_REL_POS_BOUND] * 3, *[-EEF_REL_ROT_BOUND] * 3, g_lo])
             upper = np.array([*[EEF_REL_POS_BOUND] * 3, *[EEF_REL_ROT_BOUND] * 3, g_hi])
@@ -219,15 +221,18 @@ class RmbEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start an episode. ``options``: ``world_idx`` (0..5; default drawn from the env's
-        generator) and ``random_shift`` (metres; default the constructor's). Options LeRobot's
-        rollout loop adds (``lerobot_*``, e.g. ``lerobot_new_rollout``) are ignored."""
+        generator), ``random_shift`` (metres; default the constructor's) and the task's own
+        (``Task.reset_options``, e.g. Pick's ``instruction``). Options LeRobot's rollout loop
+        adds (``lerobot_*``, e.g. ``lerobot_new_rollout``) are ignored."""
         super().reset(seed=seed)
         options = {k: v for k, v in (options or {}).items() if not k.startswith("lerobot_")}
-        unknown = set(options) - {"world_idx", "random_shift"}
+        known = ("world_idx", "random_shift", *self.task.reset_options)
+        unknown = set(options) - set(known)
         if unknown:
-            raise ValueError(
-                f"unknown reset options {sorted(unknown)}; use world_idx, random_shift"
-            )
+            raise ValueError(f"unknown reset options {sorted(unknown)}; use {', '.join(known)}")
+        task_options = {k: options[k] for k in self.task.reset_options if k in options}
+        self.task.begin_episode(self.np_random, task_options)
+        self.task_description = self.task.description
         world_idx = options.get("world_idx")
         if world_idx is None:
             world_idx = int(self.np_random.integers(len(self.task.world_offsets)))
@@ -306,9 +311,10 @@ class RmbEnv(gym.Env):
             arm = np.clip(action[:-1], self.action_space.low[:-1], self.action_space.high[:-1])
             return np.append(arm, gripper)
         if self.action_mode == "eef_abs":
-            target = action[:POSE_DIM].copy()
-            if np.linalg.norm(target[3:]) < 1e-6:
-                raise ValueError(f"eef_abs action has a zero quaternion: {action}")
+            rot6d = action[3:POLICY_POSE_DIM].reshape(2, 3)
+            if np.linalg.norm(np.cross(*rot6d)) < 1e-6:
+                raise ValueError(f"eef_abs action has a degenerate 6-D rotation: {action}")
+            target = policy_to_pose(action[:POLICY_POSE_DIM].astype(np.float64))
         else:
             target = apply_relative_pose(self._command_eef_pose, action[:REL_POSE_DIM])
         solution = self.kinematics.ik(target, self._command[:-1])

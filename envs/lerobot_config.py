@@ -20,7 +20,7 @@ from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
-from rmb_lerobot.pose import POSE_DIM, REL_POSE_DIM
+from rmb_lerobot.pose import POLICY_POSE_DIM, REL_POSE_DIM
 
 # RMB's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).
 RMB_FPS = 31
@@ -31,7 +31,7 @@ def action_dim(action_mode: str, layout: K.RobotLayout = K.UR5E_LAYOUT) -> int:
     """Numbers in one action of the given mode (see ``RmbEnv``'s action modes)."""
     dims = {
         "joint": layout.num_joints,
-        "eef_abs": POSE_DIM * layout.num_eefs + layout.num_grippers,
+        "eef_abs": POLICY_POSE_DIM * layout.num_eefs + layout.num_grippers,
         "eef_rel": REL_POSE_DIM * layout.num_eefs + layout.num_grippers,
     }
     if action_mode not in dims:

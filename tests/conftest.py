@@ -8,6 +8,9 @@ using PyAV in place of the ffmpeg binary. They let the tests check compatibility
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import av
@@ -153,3 +156,60 @@ def psnr():
         return float("inf") if mse == 0 else float(10 * np.log10(255**2 / mse))
 
     return _psnr
+
+
+# ------------------------------------------------ the LeRobot CLIs, on expert data, offline
+def _run_lerobot_cli(module: str, args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    """Run an unmodified LeRobot CLI (``python -m lerobot.scripts.<module>``) offline."""
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
+    return subprocess.run(
+        [sys.executable, "-m", f"lerobot.scripts.{module}", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def _expert_dataset(
+    task: str,
+    root: Path,
+    *,
+    world_idx: tuple[int, ...] = (0,),
+    cameras: tuple[str, ...] = ("front",),
+    size: int = 32,
+    depth: bool = False,
+) -> Path:
+    """Demonstrations by ``task``'s scripted expert (one per world, seed = episode index, as
+    ``rmb-collect``), converted as ``rmb-convert to-lerobot [--depth]`` does; returns the
+    dataset root (``root/dataset``)."""
+    from rmb_lerobot.converters import ConvertOptions, to_lerobot
+    from rmb_lerobot.envs.collect import CollectConfig, collect
+
+    config = CollectConfig(
+        task,
+        root / "rmb",
+        episodes=len(world_idx),
+        world_idx=world_idx,
+        cameras=cameras,
+        image_size=(size, size),
+    )
+    assert all(result.success for result in collect(config)), f"{task} expert failed"
+    dataset = root / "dataset"
+    options = ConvertOptions(depth=depth)
+    to_lerobot([root / "rmb"], output=dataset, options=options, video_codec="h264", progress=False)
+    return dataset
+
+
+@pytest.fixture(scope="session")
+def lerobot_cli():
+    """``lerobot_cli("lerobot_train", args, cwd)``: an unmodified LeRobot CLI, offline."""
+    return _run_lerobot_cli
+
+
+@pytest.fixture(scope="session")
+def make_expert_dataset():
+    """``make_expert_dataset(task, root, world_idx=..., cameras=..., size=..., depth=...)``:
+    scripted-expert demos converted to a LeRobotDataset (see ``_expert_dataset``)."""
+    return _expert_dataset

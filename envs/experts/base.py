@@ -20,7 +20,7 @@ import numpy as np
 from rmb_lerobot.envs.base import RmbEnv
 from scipy.spatial.transform import Rotation
 
-from rmb_lerobot.pose import relative_pose
+from rmb_lerobot.pose import pose_to_policy, relative_pose
 
 
 def top_down_rotation(across: np.ndarray, current: Rotation) -> Rotation:
@@ -141,7 +141,7 @@ class ScriptedExpert(ABC):
             self._q = self.kin.ik(pose, self._q).qpos
             action = np.append(self._q, gripper)
         elif mode == "eef_abs":
-            action = np.append(pose, gripper)
+            action = np.append(pose_to_policy(pose), gripper)
         else:
             action = np.append(relative_pose(self.env.command_eef_pose, pose), gripper)
         return action.astype(np.float32)

@@ -7,6 +7,8 @@ composes it with a robot and the shared scene (dm_control's composer split).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -29,6 +31,14 @@ class Task(ABC):
     shift_axes: np.ndarray = np.array([1.0, 1.0, 0.0])
     max_episode_steps: int = 300
     home_arm_qpos: tuple[float, ...] | None = None  # None: the robot's home pose
+    reset_options: tuple[str, ...] = ()  # extra ``env.reset`` options, see begin_episode
+
+    def begin_episode(  # noqa: B027 - optional hook
+        self, rng: np.random.Generator, options: Mapping[str, Any]
+    ) -> None:
+        """Choose the episode's variant before the world is set (e.g. a language-conditioned
+        task's instruction, which then becomes :attr:`description`). ``options`` holds the
+        reset options named in :attr:`reset_options` that were given."""
 
     @abstractmethod
     def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:

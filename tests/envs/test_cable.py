@@ -226,3 +226,43 @@ def test_expert_in_eef_rel_mode():
         assert _run_expert(env, 3)["is_success"]
     finally:
         env.close()
+
+
+def test_lerobot_train_with_cable_env_type_on_expert_demos(
+    tmp_path, make_expert_dataset, lerobot_cli
+):
+    # The unmodified lerobot-train on a tiny dataset the cable expert recorded, evaluating in
+    # the cable env (--env.type=rmb_ur5e_cable) during training.
+    dataset = make_expert_dataset("cable", tmp_path / "demos", world_idx=(0,), size=32)
+    out = tmp_path / "train"
+    env = ["--env.type=rmb_ur5e_cable", "--env.cameras=[front]", "--env.image_width=32"]
+    train = lerobot_cli(
+        "lerobot_train",
+        [
+            f"--dataset.root={dataset}",
+            "--dataset.repo_id=local/cable",
+            "--policy.type=act",
+            "--policy.pretrained_backbone_weights=null",
+            "--policy.dim_model=32",
+            "--policy.dim_feedforward=64",
+            "--policy.chunk_size=4",
+            "--policy.n_action_steps=4",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            *env,
+            "--env.image_height=32",
+            "--env.episode_length=4",
+            "--env_eval_freq=2",
+            "--eval.n_episodes=1",
+            "--eval.batch_size=1",
+            "--steps=2",
+            "--batch_size=2",
+            "--num_workers=0",
+            f"--output_dir={out}",
+            "--wandb.enable=false",
+        ],
+        tmp_path,
+    )
+    assert train.returncode == 0, train.stderr[-3000:]
+    assert (out / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").exists()
+    assert list((out / "eval").glob("videos_step_*/*/*.mp4")), "no evaluation in the cable env"

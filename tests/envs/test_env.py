@@ -11,6 +11,7 @@ from rmb_lerobot.envs.tasks.insert import HOLE, InsertTask
 from rmb_lerobot import keys as K
 from rmb_lerobot import open_episode
 from rmb_lerobot.episode import EpisodeWriter
+from rmb_lerobot.pose import pose_to_policy
 
 
 def run(env, actions, seed, options=None):
@@ -103,9 +104,12 @@ def test_eef_actions_reproduce_the_joint_command():
     env = RmbEnv(InsertTask(), action_mode="eef_abs", cameras=())
     env.reset(seed=0)
     pose = env.command_eef_pose
-    command = env.command_from_action(np.append(pose, 100.0))
+    # eef_abs takes the pose as converted datasets hold it: position + 6-D rotation (9 numbers)
+    command = env.command_from_action(np.append(pose_to_policy(pose), 100.0))
     assert command[:6] == pytest.approx(env.home_command[:6], abs=1e-3)
     assert command[6] == 100.0
+    with pytest.raises(ValueError, match="degenerate 6-D rotation"):
+        env.command_from_action(np.append(pose[:3], [1, 0, 0, 2, 0, 0, 100.0]))
     env.close()
     env = RmbEnv(InsertTask(), action_mode="eef_rel", cameras=())
     env.reset(seed=0)

@@ -36,7 +36,7 @@ def test_features_map_targets_are_the_dataset_keys():
     assert config.features["action"].shape == (7,)
 
 
-@pytest.mark.parametrize(("mode", "dim"), [("joint", 7), ("eef_abs", 8), ("eef_rel", 7)])
+@pytest.mark.parametrize(("mode", "dim"), [("joint", 7), ("eef_abs", 10), ("eef_rel", 7)])
 def test_action_dimension_follows_the_action_mode(mode, dim):
     assert action_dim(mode) == dim
     assert ENV_CONFIGS["rmb_ur5e_door"](action_mode=mode).features["action"].shape == (dim,)

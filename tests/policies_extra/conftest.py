@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -114,19 +111,6 @@ def tiny_dataset(tmp_path_factory) -> Path:
     return root
 
 
-def run_cli(module: str, args: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    """Run an unmodified LeRobot CLI (``python -m lerobot.scripts.<module>``) offline."""
-    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
-    return subprocess.run(
-        [sys.executable, "-m", f"lerobot.scripts.{module}", *args],
-        cwd=cwd,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-
-
 @pytest.fixture
 def train_and_eval(tiny_dataset, train_and_eval_on):
     """``lerobot-train`` a few steps on the tiny dataset, then ``lerobot-eval`` the checkpoint
@@ -149,42 +133,22 @@ DEPTH_WORLDS = (1, 4)  # episode i is world DEPTH_WORLDS[i], reset with seed i (
 
 
 @pytest.fixture(scope="session")
-def expert_depth_dataset(tmp_path_factory) -> Path:
+def expert_depth_dataset(tmp_path_factory, make_expert_dataset) -> Path:
     """Two Insert demonstrations by the scripted expert (front camera, RGB + depth), converted
     as ``rmb-convert to-lerobot --depth`` does: depth is ``observation.images.front_depth``."""
-    from rmb_lerobot.converters import ConvertOptions, to_lerobot
-    from rmb_lerobot.envs.collect import CollectConfig, collect
-
-    demos = tmp_path_factory.mktemp("expert_demos")
-    config = CollectConfig(
-        "insert",
-        demos,
-        episodes=len(DEPTH_WORLDS),
-        world_idx=DEPTH_WORLDS,
-        cameras=("front",),
-        image_size=(DEPTH_SIZE, DEPTH_SIZE),
-    )
-    assert all(result.success for result in collect(config))
-    root = tmp_path_factory.mktemp("dataset") / "insert_depth"
-    to_lerobot(
-        [demos],
-        output=root,
-        options=ConvertOptions(depth=True),
-        video_codec="h264",
-        progress=False,
-    )
-    return root
+    root = tmp_path_factory.mktemp("insert_depth")
+    return make_expert_dataset("insert", root, world_idx=DEPTH_WORLDS, size=DEPTH_SIZE, depth=True)
 
 
 @pytest.fixture
-def train_and_eval_on(tmp_path):
+def train_and_eval_on(tmp_path, lerobot_cli):
     """``lerobot-train`` a few steps on ``dataset``, then ``lerobot-eval`` it on Insert with
     extra ``env_args`` (e.g. ``--env.depth=true``); returns the checkpoint's config and the
     eval info (``{"config": ..., "eval": ...}``)."""
 
     def _run(dataset: Path, policy_type: str, policy_args: list[str], env_args: list[str]) -> dict:
         out = tmp_path / "train"
-        train = run_cli(
+        train = lerobot_cli(
             "lerobot_train",
             [
                 f"--policy.type={policy_type}",
@@ -205,7 +169,7 @@ def train_and_eval_on(tmp_path):
         )
         assert train.returncode == 0, train.stderr[-3000:]
         checkpoint = out / "checkpoints" / "last" / "pretrained_model"
-        evaluation = run_cli(
+        evaluation = lerobot_cli(
             "lerobot_eval",
             [
                 f"--policy.path={checkpoint}",
