@@ -71,8 +71,12 @@ ENVS: dict[str, EnvEntry] = {
         _entry("cabinet_hinge", "CabinetHingeTask", "CabinetHingeExpert"),
         _entry("cabinet_slide", "CabinetSlideTask", "CabinetSlideExpert"),
         _entry("cable", "CableTask", "CableExpert"),
+        _entry("cloth", "ClothTask", "ClothExpert"),
         _entry("door", "DoorTask", "DoorExpert"),
         _entry("insert", "InsertTask", "InsertExpert"),
+        _entry("particle", "ParticleTask", "ParticleExpert"),
+        _entry("pick", "PickTask", "PickExpert"),
+        _entry("ring", "RingTask", "RingExpert"),
         _entry("toolbox", "ToolboxTask", "ToolboxExpert"),
     )
 }

@@ -1,0 +1,192 @@
+"""Scripted expert for the Pick task: grasp the named object from above, drop it into the basket.
+
+The instruction is read from the task (privileged, like the object poses): the expert grasps
+``task.target_object`` with the gripper pointing down and its fingers closing along a direction
+whose finger zone is clear of the neighbours (:func:`~rmb_lerobot.envs.tasks.pick.best_grasp_yaw`;
+across the short side for boxes and the banana), lifts it until its base clears every other
+object and the baskets' rims, carries it over the named basket's centre, lowers it to just above
+the basket floor and lets go. While carrying, targets are placed so that the *object* ends up
+centred (the measured pinch-to-object offset absorbs any slip or swing in the grasp), and the
+last centimetres to the grasp and to the floor are covered slowly (no overshoot).
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import numpy as np
+from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.pick import FINGER_REACH, PickTask, best_grasp_yaw, grasp_yaws
+
+
+class Phase(Enum):
+    ABOVE = "above"
+    DESCEND = "descend"
+    CLOSE = "close"
+    LIFT = "lift"
+    CARRY = "carry"
+    LOWER = "lower"
+    RELEASE = "release"
+    RETREAT = "retreat"
+
+
+class PickExpert(ScriptedExpert):
+    """Tool point: the gripper's pinch point."""
+
+    approach_height = 0.05  # pinch point above the tallest object on the way to a grasp (m)
+    carry_clearance = 0.03  # object base above the objects on its way and the rims (m)
+    path_margin = 0.02  # objects nearer the carrying path than this (plus sizes) count (m)
+    wall_margin = 0.015  # object's side to the basket's near wall at the drop point (m)
+    drop_height = 0.01  # object base above the basket floor when let go (m)
+    open_gripper, closed_gripper = 0.0, 255.0
+    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
+    settle_tol = 0.5  # gripper value change per step that counts as settled
+    still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
+    slow_zone = 0.03  # the last part of the descent / lowering is done slowly (m)
+    grasp_speed, place_speed = 0.05, 0.05  # m/s
+
+    def on_reset(self) -> None:
+        task: PickTask = self.env.task
+        data = self.env.data
+        self.phase = Phase.ABOVE
+        self._count = 0
+        self._last_gripper = 0.0
+        self._grasp = np.zeros(3)  # pinch target while closing
+        self._place = np.zeros(3)  # pinch target while lowering into the basket
+        self._release = np.zeros(3)  # pinch target while opening
+        self._obj = task.target_object
+        self._basket = task.target_basket
+        index = task.objects.index(self._obj)
+        positions = np.array([data.body(o.body).xpos[:2] for o in task.objects])
+        yaw = best_grasp_yaw(index, positions, task.objects)
+        yaw = grasp_yaws(self._obj)[0] if yaw is None else yaw
+        site = data.site(self.env.robot.tcp_site)
+        eef_pos, eef_rot = self.eef_world()
+        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        self._rot = top_down_rotation(np.array([np.cos(yaw), np.sin(yaw), 0.0]), eef_rot)
+        tallest = max(o.height for o in task.objects)
+        self._transit_z = TABLE_TOP_Z + tallest + self.approach_height
+        self._carry_base_z = self._carry_height(positions, index)
+        self._drop = self._drop_xy()
+        self._last_tool = site.xpos.copy()
+        self._tool_speed = 0.0
+
+    def tool_offset(self) -> np.ndarray:
+        return self._offset
+
+    def measured_tool(self) -> np.ndarray:
+        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+
+    # ------------------------------------------------------------------ helpers
+    def _carry_height(self, positions: np.ndarray, index: int) -> float:
+        """Height of the object's base while carrying: clear of the baskets' rims and of every
+        object near the straight path to the basket (the gripper is above the object)."""
+        task: PickTask = self.env.task
+        start = positions[index]
+        goal = self.env.data.body(self._basket.body).xpos[:2]
+        reach = max(*self._obj.footprint, FINGER_REACH)
+        heights = [b.height for b in task.baskets]
+        for i, other in enumerate(task.objects):
+            if i == index:
+                continue
+            t = np.clip((positions[i] - start) @ (goal - start) / np.sum((goal - start) ** 2), 0, 1)
+            distance = np.linalg.norm(positions[i] - (start + t * (goal - start)))
+            if distance < reach + max(other.footprint) + self.path_margin:
+                heights.append(other.height)
+        return TABLE_TOP_Z + max(heights) + self.carry_clearance
+
+    def _drop_xy(self) -> np.ndarray:
+        """Where the object's base centre goes: in the basket, as near the robot as its walls
+        allow (the far basket is at the edge of the arm's reach)."""
+        basket = self.env.data.body(self._basket.body).xpos[:2]
+        body = self.env.data.body(self._obj.body)
+        axes = body.xmat.reshape(3, 3)[:2, :2]
+        half_x = np.abs(axes[0]) @ np.asarray(self._obj.footprint)  # extent along world x
+        slack = max(0.0, self._basket.inner[0] - half_x - self.wall_margin)
+        return basket - np.array([slack, 0.0])
+
+    def _grasp_point(self) -> np.ndarray:
+        body = self.env.data.body(self._obj.body)
+        return body.xpos + body.xmat.reshape(3, 3) @ np.asarray(self._obj.grasp)
+
+    def _gripper_settled(self) -> bool:
+        self._count += 1
+        gripper = self.env.measured_joint_pos()[-1]
+        settled = abs(gripper - self._last_gripper) < self.settle_tol
+        self._last_gripper = gripper
+        return self._count >= self.min_gripper_steps and settled
+
+    def _arrived(self, target: np.ndarray, tol: float) -> bool:
+        """Reference and hand at ``target`` and the hand at rest."""
+        return self.reached(target, tol) and self._tool_speed < self.still_speed
+
+    def _slowly(self, target: np.ndarray, speed: float) -> np.ndarray:
+        """``target``, but approached at ``speed`` once the reference is within the slow zone."""
+        delta = target - self._ref_pos
+        dist = np.linalg.norm(delta)
+        step = speed * self.dt
+        if dist > self.slow_zone or dist <= step:
+            return target
+        return self._ref_pos + delta * (step / dist)
+
+    def _over_basket(self, base_z: float) -> np.ndarray:
+        """Pinch target that puts the object's base centre over the drop point at ``base_z``."""
+        data = self.env.data
+        held = self.measured_tool() - data.body(self._obj.body).xpos
+        return np.array([*(self._drop + held[:2]), base_z + held[2]])
+
+    def _object_over_drop(self, tol: float) -> bool:
+        rel = self.env.data.body(self._obj.body).xpos[:2] - self._drop
+        return bool(np.max(np.abs(rel)) < tol)
+
+    # ------------------------------------------------------------------ phases
+    def waypoint(self) -> Waypoint:
+        tool = self.measured_tool()
+        self._tool_speed = float(np.linalg.norm(tool - self._last_tool)) / self.dt
+        self._last_tool = tool
+        if self.phase is Phase.ABOVE:
+            grasp = self._grasp_point()
+            # Above the tallest object: the way there may pass over any of them.
+            target = np.array([*grasp[:2], self._transit_z])
+            if self.reached(target, 0.01):
+                self.phase = Phase.DESCEND
+            return Waypoint(target, self._rot, self.open_gripper)
+        if self.phase is Phase.DESCEND:
+            grasp = self._grasp_point()
+            if self._arrived(grasp, 0.003):
+                self.phase = Phase.CLOSE
+                self._grasp = grasp.copy()
+            return Waypoint(self._slowly(grasp, self.grasp_speed), self._rot, self.open_gripper)
+        if self.phase is Phase.CLOSE:
+            if self._gripper_settled():
+                self.phase = Phase.LIFT
+            return Waypoint(self._grasp, self._rot, self.closed_gripper)
+        if self.phase is Phase.LIFT:
+            target = np.array([*self._grasp[:2], self._over_basket(self._carry_base_z)[2]])
+            if self.reached(target, 0.01):
+                self.phase = Phase.CARRY
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.CARRY:
+            target = self._over_basket(self._carry_base_z)
+            # Only xy matters here (the lowering follows): near the edge of the arm's reach, the
+            # hand may hang a centimetre below a high carrying target.
+            still = self._tool_speed < self.still_speed
+            if self.reached(target, 0.01, xy_only=True) and still and self._object_over_drop(0.01):
+                self.phase = Phase.LOWER
+                floor = self.env.data.body(self._basket.body).xpos[2] + self._basket.floor
+                self._place = self._over_basket(floor + self.drop_height)
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.LOWER:
+            if self._arrived(self._place, 0.005):
+                self.phase = Phase.RELEASE
+                self._count = 0
+                self._release = self._ref_pos.copy()
+            target = self._slowly(self._place, self.place_speed)
+            return Waypoint(target, self._rot, self.closed_gripper)
+        if self.phase is Phase.RELEASE:
+            if self._gripper_settled():
+                self.phase = Phase.RETREAT
+            return Waypoint(self._release, self._rot, self.open_gripper)
+        target = self._release + np.array([0.0, 0.0, self.approach_height])
+        return Waypoint(target, self._rot, self.open_gripper)

@@ -1,0 +1,144 @@
+"""RMB's MujocoUR5eCloth: lift a cloth hanging from a board and lay it up onto the board.
+
+Geometry follows RMB's ``env_ur5e_cloth.xml``: a 12 x 36 x 1.6 cm board floats 0.385 m above
+the table at (0.15, -0.065, 1.2), turned by -45 degrees about the vertical (its long side
+runs along the world (1, 1) diagonal, facing the robot). A 32 x 24 cm cloth, a 9 x 7 grid of
+points 4 cm apart (RMB's ``composite`` grid), hangs vertically from its top row, which is fixed
+just outside and 3 cm below the board's robot-side edge (RMB welds that row to the board); the
+cloth's bottom edge is 11.5 cm above the table. As in RMB the cloth and the board move
+together: in y from -0.12 to +0.08 m across the six worlds, and the random shift moves both in
+x, y and z (RMB shifts them in all three axes).
+
+The cloth is MuJoCo's 2D flex (triangulated grid, three slide joints per free vertex),
+generated with :meth:`mujoco.MjsBody.make_flex` (the ``flexcomp`` macro of MjSpec) as a child
+of the board. ``make_flex`` has no pins, so the top row is pinned by removing the joints of its
+vertex bodies: they are then welded to the board, which is exactly what pinning does. The
+cloth is inextensible (flex edge equality constraints) and has no bending stiffness, like
+RMB's composite cloth; this keeps the scene on the fast ``implicitfast`` integrator (a shell
+with continuum elasticity needs the ``discrete`` integrator and stepped ~4x slower here).
+The cloth weighs 0.1 kg (RMB's 63 spheres of water density weigh 2.1 kg) and does not collide
+with itself (cheaper; the task never needs it to).
+
+Success is RMB's ``_get_success``: every cloth point is above the board's lowest corner minus
+0.092 m in z (the cloth is lifted up to the board) and beyond the board's smallest corner x
+minus 0.001 m (it was not pulled off towards the robot).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from rmb_lerobot.envs.mujoco.robot import RobotSpec
+from rmb_lerobot.envs.tasks.base import Task
+
+CLOTH = "cloth"  # the flex; its vertex bodies are cloth_<i>, i = row * CLOTH_COLUMNS + column
+BOARD = "board"  # the body and its box geom
+BOARD_HALF_SIZE = (0.06, 0.18, 0.008)  # across, along the cloth's top edge, thickness
+CLOTH_ROWS = 7  # top row (row 0, pinned) to bottom edge
+CLOTH_COLUMNS = 9  # along the board
+CLOTH_SPACING = 0.04  # m between neighbouring grid points
+CLOTH_MASS = 0.1  # kg, a light towel
+CLOTH_RADIUS = 0.006  # collision half thickness (m): pinchable, and no tunnelling (RMB: 0.02)
+SUCCESS_X_MARGIN = 0.001  # RMB: cloth x must exceed the board's smallest corner x minus this
+SUCCESS_Z_MARGIN = 0.092  # RMB: cloth z must exceed the board's lowest corner z minus this
+
+
+def board_corners(center: np.ndarray, rotation: np.ndarray, half_size: np.ndarray) -> np.ndarray:
+    """World positions (8, 3) of a box's corners from its centre, rotation matrix, half sizes."""
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    return (np.asarray(rotation).reshape(3, 3) @ (signs * half_size).T).T + center
+
+
+def cloth_on_board(points: np.ndarray, corners: np.ndarray) -> bool:
+    """RMB's Cloth success test on the cloth grid points (n, 3) and the board corners (8, 3)."""
+    points = np.asarray(points)
+    x_threshold = corners[:, 0].min() - SUCCESS_X_MARGIN
+    z_threshold = corners[:, 2].min() - SUCCESS_Z_MARGIN
+    return bool(points[:, 0].min() > x_threshold and points[:, 2].min() > z_threshold)
+
+
+class ClothTask(Task):
+    """The cloth is RMB's 9 x 7 grid (63 vertices, 54 free: 162 dofs)."""
+
+    rmb_env_name = "MujocoUR5eCloth"
+    description = "Lift the hanging cloth and roll it up onto the board."
+    world_offsets = np.array([[0.0, y, 0.0] for y in (-0.12, -0.08, -0.04, 0.0, 0.04, 0.08)])
+    shift_axes = np.array([1.0, 1.0, 1.0])
+    max_episode_steps = 400
+    # RMB's MujocoUR5eClothEnv start pose.
+    home_arm_qpos = (1.2 * np.pi, -np.pi / 2, -0.85 * np.pi, -0.65 * np.pi, -0.5 * np.pi, 0.0)
+    board_nominal_pos = np.array([0.15, -0.065, 1.2])
+    board_yaw = -np.pi / 4
+    cloth_centre = np.array([0.11, 0.003, 1.05])  # RMB's cloth body origin (world, nominal)
+    friction = 1.0
+
+    @property
+    def board_quat(self) -> np.ndarray:
+        return np.array([np.cos(self.board_yaw / 2), 0.0, 0.0, np.sin(self.board_yaw / 2)])
+
+    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+        board = spec.worldbody.add_body(
+            name=BOARD, pos=list(self.board_nominal_pos), quat=list(self.board_quat)
+        )
+        board.add_geom(
+            name=BOARD,
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=list(BOARD_HALF_SIZE),
+            rgba=[0.8, 0.8, 0.2, 1.0],
+            friction=[self.friction, 0.005, 0.0001],
+        )
+        self._build_cloth(spec, board)
+
+    def _build_cloth(self, spec: mujoco.MjSpec, board: mujoco.MjsBody) -> None:
+        """The flex grid in the board frame: grid x (rows) points down, grid y along the
+        board's long side, so point ``row * CLOTH_COLUMNS + column`` sits in row ``row``."""
+        yaw = self.board_yaw
+        offset = self.cloth_centre - self.board_nominal_pos
+        across = np.array([np.cos(yaw), np.sin(yaw), 0.0])  # board x axis in the world
+        along = np.array([-np.sin(yaw), np.cos(yaw), 0.0])  # board y axis in the world
+        centre = [offset @ across, offset @ along, offset[2]]
+        down = [np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0]  # grid x -> board -z
+        flex = board.make_flex(
+            name=CLOTH,
+            type="grid",
+            dim=2,
+            count=[CLOTH_ROWS, CLOTH_COLUMNS, 1],
+            spacing=[CLOTH_SPACING] * 3,
+            mass=CLOTH_MASS,
+            radius=CLOTH_RADIUS,
+            equality=1,  # inextensible edges
+            pos=centre,
+            quat=down,
+        )
+        for i in range(CLOTH_COLUMNS):  # pin the top row to the board
+            for joint in list(spec.body(f"{CLOTH}_{i}").joints):
+                spec.delete(joint)
+        # MuJoCo's default constraint softness (solref 0.02 s) lets the arm stretch these light
+        # edges several-fold when it squeezes the cloth against the board; 2 timesteps keeps
+        # them near their length (as for the cable's edges).
+        (edges,) = [eq for eq in spec.equalities if eq.type == mujoco.mjtEq.mjEQ_FLEX]
+        edges.solref = [2 * spec.option.timestep, 1.0]
+        edges.solimp = [0.95, 0.99, 0.001, 0.5, 2.0]
+        flex.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
+        flex.friction = [self.friction, 0.005, 0.0001]
+        flex.rgba = [0.85, 0.35, 0.3, 1.0]
+
+    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
+        model.body(BOARD).pos = self.board_nominal_pos + offset
+
+    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+        """Nothing to do: the cloth hangs flat and at rest in its build pose (``qpos0``, relative
+        to the board), where ``mj_resetData`` already put it."""
+
+    def cloth_points(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+        """World positions of the cloth's grid points (rows top to bottom) (63, 3)."""
+        flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
+        start, count = int(model.flex_vertadr[flex]), int(model.flex_vertnum[flex])
+        return data.flexvert_xpos[start : start + count].copy()
+
+    def board_corners(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+        geom = data.geom(BOARD)
+        return board_corners(geom.xpos, geom.xmat, model.geom(BOARD).size)
+
+    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+        return cloth_on_board(self.cloth_points(model, data), self.board_corners(model, data))

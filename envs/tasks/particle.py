@@ -1,0 +1,221 @@
+"""RMB's MujocoUR5eParticle: scoop granular particles from one container into another.
+
+Geometry follows RMB's ``env_ur5e_particle.xml``: a source container (23 cm square inside,
+walls 4 cm above the table) centred at (-0.05, 0.1), a goal container (15 cm square inside) at
+(0.05, -0.2), and a free scoop (8.4 x 8.2 cm plate with 2 cm walls on its back and sides, open
+towards +x, and a 6 cm upright handle behind the back wall) lying on the table at
+(-0.15, -0.15). As in RMB the scoop starts on the table, not in the hand (RMB's operation grasps
+its handle before the demonstration starts; here that grasp is part of the episode). Only the
+source container and its particles move: in y from 0 to +0.20 m across the six worlds (the
+random shift moves them in x and y).
+
+The particles are 1 cm spheres that translate but do not rotate (three slide joints each),
+like the bodies of MuJoCo's ``composite type="particle"`` that RMB uses: they slide like grains
+instead of rolling away, and have half the degrees of freedom of free spheres. RMB drops 192 of
+them into the source container; here ``particle_grid`` places 30 at rest in a block in its +x
+half (the scoop goes in behind them), because every moving particle adds contacts to the
+solver and a few dozen are plenty for a criterion that needs three. MuJoCo's sleeping is on:
+particles at rest drop out of the simulation until something touches them (the robot, which
+is actuated, never sleeps), which makes the scene several times faster while they rest.
+
+Success is RMB's ``_get_success``: at least three particle centres lie within 0.08 m of the
+goal container's centre on every axis. As in RMB that centre is 4 cm below the table top (the
+middle of walls that reach 4 cm below and above it), so a particle counts when it is inside
+the container below the top of its walls, not while it rests on a rim or is held above it.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from rmb_lerobot.envs.mujoco.robot import RobotSpec
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.base import Task
+
+SOURCE = "source_case"
+GOAL = "goal_case"
+SCOOP = "scoop"  # the body and its free joint
+SCOOP_HANDLE = "scoop_handle"
+PARTICLE = "particle"  # bodies particle_<i>
+CASE_HEIGHT = 0.04  # walls above the table
+CASE_CENTRE_BELOW_TABLE = 0.04  # RMB's container origin: its walls' centre
+CASE_WALL_HALF_THICKNESS = 0.005
+SOURCE_HALF_SIDE = 0.12  # wall centre lines from the container's centre
+GOAL_HALF_SIDE = 0.08
+SCOOP_PLATE_HALF = (0.042, 0.041, 0.001)
+SCOOP_WALL_HEIGHT = 0.02
+# A smooth scoop: against the particles (MuJoCo takes the larger of two friction coefficients)
+# the particles' 0.5 applies, so they slide out once it tilts beyond ~27 degrees.
+SCOOP_FRICTION = 0.4
+HANDLE_HALF = (0.008, 0.008, 0.03)
+HANDLE_POS = (-0.05, 0.0, 0.025)  # in the scoop frame (origin: the plate's centre)
+PARTICLE_RADIUS = 0.01
+GOAL_HALF_EXTENTS = np.array([0.08, 0.08, 0.08])
+SUCCESS_COUNT = 3
+_SOURCE_RGBA = [0.8, 0.1, 0.5, 1.0]
+_GOAL_RGBA = [0.1, 0.5, 0.8, 1.0]
+_SCOOP_RGBA = [0.1, 0.8, 0.1, 1.0]
+_PARTICLE_RGBA = [0.8, 0.8, 0.2, 1.0]
+
+
+def count_in_goal(particles: np.ndarray, goal_centre: np.ndarray) -> int:
+    """How many particle centres (n, 3) lie in RMB's goal box around ``goal_centre``."""
+    inside = np.all(np.abs(np.asarray(particles) - goal_centre) <= GOAL_HALF_EXTENTS, axis=1)
+    return int(inside.sum())
+
+
+def _add_case(
+    parent: mujoco.MjsBody,
+    name: str,
+    pos: np.ndarray,
+    half_side: float,
+    rgba: list[float],
+    mocap: bool = False,
+) -> None:
+    """Four walls around a square (RMB's ``*_case`` bodies, walls ``<name>_px`` etc.); from
+    the table top 4 cm up (RMB's walls also reach 4 cm into the table, where nothing sees
+    them)."""
+    body = parent.add_body(name=name, pos=list(pos), mocap=mocap)
+    length = half_side + CASE_WALL_HALF_THICKNESS
+    wall_z = CASE_CENTRE_BELOW_TABLE + CASE_HEIGHT / 2
+    for suffix, xy, size in (
+        ("px", (half_side, 0.0), (CASE_WALL_HALF_THICKNESS, length)),
+        ("nx", (-half_side, 0.0), (CASE_WALL_HALF_THICKNESS, length)),
+        ("py", (0.0, half_side), (length, CASE_WALL_HALF_THICKNESS)),
+        ("ny", (0.0, -half_side), (length, CASE_WALL_HALF_THICKNESS)),
+    ):
+        body.add_geom(
+            name=f"{name}_{suffix}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[*size, CASE_HEIGHT / 2],
+            pos=[*xy, wall_z],
+            rgba=rgba,
+        )
+
+
+def _add_scoop(parent: mujoco.MjsBody, pos: np.ndarray) -> None:
+    """RMB's scoop: plate, back and side walls, and the handle (boxes, default density)."""
+    box = mujoco.mjtGeom.mjGEOM_BOX
+    scoop = parent.add_body(name=SCOOP, pos=list(pos))
+    scoop.add_freejoint(name=SCOOP)
+    px, py, pz = SCOOP_PLATE_HALF
+    wall = SCOOP_WALL_HEIGHT / 2
+    for size, wall_pos in (
+        ((px, py, pz), (0.0, 0.0, 0.0)),  # plate
+        ((0.002, py, wall), (-0.04, 0.0, wall)),  # back wall
+        ((px, 0.001, wall), (0.0, 0.04, wall)),  # side walls
+        ((px, 0.001, wall), (0.0, -0.04, wall)),
+    ):
+        scoop.add_geom(
+            type=box,
+            size=list(size),
+            pos=list(wall_pos),
+            rgba=_SCOOP_RGBA,
+            friction=[SCOOP_FRICTION, 0.005, 0.0001],
+        )
+    scoop.add_geom(
+        name=SCOOP_HANDLE, type=box, size=list(HANDLE_HALF), pos=list(HANDLE_POS),
+        rgba=_SCOOP_RGBA,
+    )  # fmt: skip
+
+
+class ParticleTask(Task):
+    """``particle_grid`` (along x, y; layers) particles ``particle_spacing`` apart (centre to
+    centre), the block's centre ``particle_block_offset`` (x, y) from the source's centre."""
+
+    rmb_env_name = "MujocoUR5eParticle"
+    description = "Scoop the particles from the source container into the goal container."
+    world_offsets = np.array([[0.0, y, 0.0] for y in (0.0, 0.04, 0.08, 0.12, 0.16, 0.20)])
+    max_episode_steps = 700
+    # RMB's MujocoUR5eParticleEnv start pose (the Cable pose with the wrist turned by pi / 2).
+    home_arm_qpos = (np.pi, -np.pi / 2, -0.75 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi)
+    source_nominal_pos = np.array([-0.05, 0.1, TABLE_TOP_Z - CASE_CENTRE_BELOW_TABLE])
+    goal_pos = np.array([0.05, -0.2, TABLE_TOP_Z - CASE_CENTRE_BELOW_TABLE])
+    scoop_pos = np.array([-0.15, -0.15, TABLE_TOP_Z + SCOOP_PLATE_HALF[2]])
+    particle_grid = (5, 6, 1)
+    particle_spacing = 0.0205  # a little over a diameter: the particles start apart, at rest
+    particle_block_offset = np.array([0.06, 0.0])
+    particle_friction = 0.5
+
+    def __init__(self) -> None:
+        # (id(model), particle body ids, their first qpos and dof addresses), on first use.
+        self._particle_ids: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @property
+    def num_particles(self) -> int:
+        return int(np.prod(self.particle_grid))
+
+    def particle_start_positions(self, source_pos: np.ndarray) -> np.ndarray:
+        """Particle centres (n, 3) at the start, for the source container at ``source_pos``."""
+        nx, ny, nz = self.particle_grid
+        s = self.particle_spacing
+        xs, ys = ((np.arange(n) - (n - 1) / 2) * s for n in (nx, ny))
+        zs = PARTICLE_RADIUS + np.arange(nz) * s
+        grid = np.array([(x, y, z) for z in zs for x in xs for y in ys])
+        floor = np.array([*(source_pos[:2] + self.particle_block_offset), TABLE_TOP_Z])
+        return floor + grid
+
+    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+        # Resting particles (and the scoop) sleep until something awake touches them.
+        spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+        # Coarser sphere meshes (MuJoCo's default 28 x 16 makes the 30 particles cost as many
+        # triangles as the robot): a quarter less render time, images within 0.2 grey levels.
+        spec.visual.quality.numslices = 12
+        spec.visual.quality.numstacks = 8
+        world = spec.worldbody
+        # A mocap body, so that a world shift applied after mj_resetData reaches the walls:
+        # with sleeping on, MuJoCo computes static bodies' poses only when it resets.
+        _add_case(world, SOURCE, self.source_nominal_pos, SOURCE_HALF_SIDE, _SOURCE_RGBA, True)
+        _add_case(world, GOAL, self.goal_pos, GOAL_HALF_SIDE, _GOAL_RGBA)
+        _add_scoop(world, self.scoop_pos)
+        for i, pos in enumerate(self.particle_start_positions(self.source_nominal_pos)):
+            body = world.add_body(name=f"{PARTICLE}_{i}", pos=list(pos))
+            for axis in np.eye(3):
+                body.add_joint(type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(axis))
+            body.add_geom(
+                type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                size=[PARTICLE_RADIUS, 0, 0],
+                rgba=_PARTICLE_RGBA,
+                friction=[self.particle_friction, 0.005, 0.0001],
+            )
+
+    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
+        model.body(SOURCE).pos = self.source_nominal_pos + offset
+
+    def _ids(self, model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Particle body ids and the qpos and dof addresses of their x slide joints (the y
+        and z joints follow)."""
+        if self._particle_ids is None or self._particle_ids[0] != id(model):
+            names = (f"{PARTICLE}_{i}" for i in range(self.num_particles))
+            bodies = np.array([model.body(name).id for name in names])
+            joints = model.body_jntadr[bodies]
+            self._particle_ids = (
+                id(model),
+                bodies,
+                model.jnt_qposadr[joints],
+                model.jnt_dofadr[joints],
+            )
+        return self._particle_ids[1:]
+
+    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+        """The scoop on the table at its place, the particles at rest in their block, moved
+        with the source container (their slide joints hold the world's shift)."""
+        source = model.body(SOURCE)
+        data.mocap_pos[source.mocapid[0]] = source.pos
+        scoop = data.joint(SCOOP)
+        scoop.qpos[:3] = self.scoop_pos
+        scoop.qpos[3:] = (1.0, 0.0, 0.0, 0.0)
+        scoop.qvel[:] = 0.0
+        _, qpos, dofs = self._ids(model)
+        shift = source.pos - self.source_nominal_pos
+        for axis in range(3):
+            data.qpos[qpos + axis] = shift[axis]
+            data.qvel[dofs + axis] = 0.0
+
+    def particle_positions(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+        """World positions of the particle centres (n, 3)."""
+        return data.xpos[self._ids(model)[0]].copy()
+
+    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+        goal = data.body(GOAL).xpos
+        return count_in_goal(self.particle_positions(model, data), goal) >= SUCCESS_COUNT

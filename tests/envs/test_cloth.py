@@ -1,0 +1,235 @@
+"""Cloth: success criterion on constructed cloths, worlds, the flex model, stability, the expert."""
+
+import mujoco
+import numpy as np
+import pytest
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.experts.cloth import ClothExpert
+from rmb_lerobot.envs.tasks.cloth import (
+    BOARD,
+    BOARD_HALF_SIZE,
+    CLOTH,
+    CLOTH_COLUMNS,
+    CLOTH_ROWS,
+    CLOTH_SPACING,
+    ClothTask,
+    board_corners,
+    cloth_on_board,
+)
+from scipy.spatial.transform import Rotation
+
+NUM_POINTS = CLOTH_ROWS * CLOTH_COLUMNS
+BOARD_ROT = Rotation.from_euler("z", ClothTask.board_yaw).as_matrix()
+CORNERS = board_corners(ClothTask.board_nominal_pos, BOARD_ROT, np.array(BOARD_HALF_SIZE))
+Z_THRESHOLD = CORNERS[:, 2].min() - 0.092  # RMB: 0.092 m below the board's lowest corner
+X_THRESHOLD = CORNERS[:, 0].min() - 0.001
+ACROSS, ALONG = BOARD_ROT[:, 0], BOARD_ROT[:, 1]  # away from the robot, along the hem
+HINGE_ACROSS, CLOTH_ALONG = (ClothTask.cloth_centre - ClothTask.board_nominal_pos) @ BOARD_ROT[
+    :, :2
+]
+
+
+@pytest.fixture(scope="module")
+def cloth_env():
+    env = RmbEnv(ClothTask(), cameras=())
+    yield env
+    env.close()
+
+
+def _grid(rows_across: np.ndarray, rows_z: np.ndarray) -> np.ndarray:
+    """Cloth points (row-major, top row first) with row ``r`` at board-frame offset
+    ``rows_across[r]`` from the board centre and height ``rows_z[r]``."""
+    centre = ClothTask.board_nominal_pos
+    along = CLOTH_ALONG + (np.arange(CLOTH_COLUMNS) - (CLOTH_COLUMNS - 1) / 2) * CLOTH_SPACING
+    return np.array(
+        [
+            centre + a * ACROSS + s * ALONG + np.array([0.0, 0.0, z - centre[2]])
+            for a, z in zip(rows_across, rows_z, strict=True)
+            for s in along
+        ]
+    )
+
+
+HINGE_Z = ClothTask.cloth_centre[2] + (CLOTH_ROWS - 1) / 2 * CLOTH_SPACING
+TOP_Z = ClothTask.board_nominal_pos[2] + BOARD_HALF_SIZE[2] + 0.004
+# Hanging straight down from the pinned row, as at the start.
+HANGING = _grid(np.full(CLOTH_ROWS, HINGE_ACROSS), HINGE_Z - CLOTH_SPACING * np.arange(CLOTH_ROWS))
+# Laid over the board: the pinned row, then up over the near edge and across the top.
+DRAPED = _grid(
+    np.array([HINGE_ACROSS, -0.06, -0.02, 0.02, 0.055, 0.065, 0.065]),
+    np.array([HINGE_Z, TOP_Z, TOP_Z, TOP_Z, TOP_Z, TOP_Z - 0.03, TOP_Z - 0.07]),
+)
+
+
+def test_geometry_is_rmbs():
+    assert round(HINGE_Z, 9) == 1.17  # RMB: the welded row, 3 cm below the board centre
+    assert round(HANGING[:, 2].min(), 9) == 0.93
+    assert round(Z_THRESHOLD, 9) == 1.1  # 0.092 m below the board's underside at 1.192 m
+
+
+def test_hanging_cloth_fails_and_draped_cloth_succeeds():
+    assert not cloth_on_board(HANGING, CORNERS)
+    assert cloth_on_board(DRAPED, CORNERS)
+
+
+def test_a_point_below_the_height_threshold_fails():
+    low = DRAPED.copy()
+    low[-1, 2] = Z_THRESHOLD - 0.001
+    assert not cloth_on_board(low, CORNERS)
+    low[-1, 2] = Z_THRESHOLD + 0.001
+    assert cloth_on_board(low, CORNERS)
+
+
+def test_cloth_pulled_towards_the_robot_fails():
+    pulled = DRAPED.copy()
+    pulled[-1, 0] = X_THRESHOLD - 0.001  # high enough, but beyond the board's nearest corner
+    assert not cloth_on_board(pulled, CORNERS)
+
+
+def _set_cloth(env: RmbEnv, points: np.ndarray) -> None:
+    """Put the simulated cloth's free vertices at ``points`` (pinned ones stay on the board)."""
+    model, data = env.model, env.data
+    for i in range(CLOTH_COLUMNS, NUM_POINTS):
+        body = data.body(f"{CLOTH}_{i}")
+        adr = model.jnt_qposadr[model.body(f"{CLOTH}_{i}").jntadr[0]]
+        rot = body.xmat.reshape(3, 3)
+        rest = body.xpos - rot @ data.qpos[adr : adr + 3]
+        data.qpos[adr : adr + 3] = rot.T @ (points[i] - rest)
+    mujoco.mj_forward(model, data)
+
+
+def test_is_success_reads_the_simulated_cloth(cloth_env):
+    cloth_env.reset(seed=0, options={"world_idx": 3})
+    assert not cloth_env.task.is_success(cloth_env.model, cloth_env.data)
+    _set_cloth(cloth_env, DRAPED)
+    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    assert points[CLOTH_COLUMNS:] == pytest.approx(DRAPED[CLOTH_COLUMNS:])
+    assert cloth_env.task.is_success(cloth_env.model, cloth_env.data)
+
+
+def test_cloth_is_a_pinned_2d_flex_of_rmbs_grid(cloth_env):
+    model = cloth_env.model
+    flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
+    assert model.nflex == 1 and model.flex_dim[flex] == 2
+    assert model.flex_vertnum[flex] == NUM_POINTS == 63  # RMB's 9 x 7 composite grid
+    dofs = [model.body(f"{CLOTH}_{i}").dofnum[0] for i in range(NUM_POINTS)]
+    assert dofs == [0] * CLOTH_COLUMNS + [3] * (NUM_POINTS - CLOTH_COLUMNS)  # top row pinned
+    assert all(
+        model.body_parentid[model.body(f"{CLOTH}_{i}").id] == model.body(BOARD).id
+        for i in range(NUM_POINTS)
+    )
+    is_flex_eq = model.eq_type == mujoco.mjtEq.mjEQ_FLEX
+    assert is_flex_eq.sum() == 1 and model.eq_obj1id[is_flex_eq][0] == flex  # inextensible
+
+
+@pytest.mark.parametrize("world_idx", [0, 5])
+def test_worlds_shift_cloth_and_board_together(cloth_env, world_idx):
+    _, info = cloth_env.reset(seed=0, options={"world_idx": world_idx})
+    offset = ClothTask.world_offsets[world_idx]
+    board = cloth_env.data.geom(BOARD).xpos
+    assert board == pytest.approx(ClothTask.board_nominal_pos + offset)
+    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    assert points == pytest.approx(HANGING + offset, abs=1e-9)
+    assert not info["is_success"]
+
+
+def test_worlds_span_rmbs_offsets():
+    assert ClothTask.world_offsets[:, 1] == pytest.approx(np.linspace(-0.12, 0.08, 6))
+    assert not ClothTask.world_offsets[:, [0, 2]].any()
+
+
+def test_random_shift_is_bounded_three_dimensional_and_seeded(cloth_env):
+    nominal = ClothTask.board_nominal_pos + ClothTask.world_offsets[2]
+    positions = []
+    for _ in range(2):
+        cloth_env.reset(seed=7, options={"world_idx": 2, "random_shift": 0.03})
+        positions.append(cloth_env.data.geom(BOARD).xpos.copy())
+    shift = positions[0] - nominal
+    assert np.all(np.abs(shift) <= 0.03) and np.all(np.abs(shift) > 1e-4)  # x, y and z (RMB)
+    assert positions[1] == pytest.approx(positions[0])
+
+
+def test_start_pose_is_rmbs(cloth_env):
+    obs, _ = cloth_env.reset(seed=0)
+    assert obs["agent_pos"][:6] == pytest.approx(ClothTask.home_arm_qpos, abs=1e-6)
+
+
+def _edge_lengths(env: RmbEnv) -> np.ndarray:
+    flex = mujoco.mj_name2id(env.model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
+    start, count = env.model.flex_edgeadr[flex], env.model.flex_edgenum[flex]
+    edges = env.model.flex_edge[start : start + count]
+    points = env.task.cloth_points(env.model, env.data)
+    return np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
+
+
+def test_random_actions_keep_the_simulation_stable():
+    env = RmbEnv(ClothTask(), cameras=())
+    try:
+        env.action_space.seed(0)
+        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+        rest = _edge_lengths(env)
+        first_free = env.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
+        cloth_dofs = slice(first_free, first_free + 3 * (NUM_POINTS - CLOTH_COLUMNS))
+        fastest, stretch = 0.0, []
+        for _ in range(1000):
+            env.step(env.action_space.sample())
+            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+            fastest = max(fastest, float(np.abs(env.data.qvel[cloth_dofs]).max()))
+            stretch.append(float((_edge_lengths(env) / rest).max()))
+        board = env.data.geom(BOARD).xpos.copy()
+        top_row = env.task.cloth_points(env.model, env.data)[:CLOTH_COLUMNS]
+    finally:
+        env.close()
+    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    # Random joint targets slam the arm into the cloth and the board at full speed: an edge
+    # squeezed between them stretches for a moment, but never far, and springs back.
+    assert max(stretch) < 2.5
+    assert np.percentile(stretch, 90) < 1.1 and stretch[-1] < 1.1
+    assert np.linalg.norm(top_row - board, axis=1).max() < 0.25  # still hanging from the board
+
+
+def test_same_seed_same_rollout(cloth_env):
+    def rollout() -> np.ndarray:
+        cloth_env.reset(seed=3, options={"random_shift": 0.03})
+        rng = np.random.default_rng(3)
+        for _ in range(30):
+            action = cloth_env.home_command + rng.normal(0.0, 0.05, 7)
+            action[-1] = 255.0 * rng.random()
+            cloth_env.step(action.astype(np.float32))
+        return cloth_env.data.qpos.copy()
+
+    first = rollout()
+    cloth_env.reset(seed=4)
+    assert np.array_equal(rollout(), first)
+
+
+def test_catalog_lists_the_cloth():
+    assert TASKS["cloth"] is ClothTask and EXPERTS["cloth"] is ClothExpert
+
+
+def _run_expert(env: RmbEnv, episode: int) -> dict:
+    expert = ClothExpert(env)
+    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
+    expert.reset()
+    info = {}
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        if terminated:
+            break
+    return info
+
+
+@pytest.mark.parametrize("episode", [0, 5])  # the cloth nearest the robot's right and left
+def test_expert_lifts_the_cloth_onto_the_board(cloth_env, episode):
+    info = _run_expert(cloth_env, episode)
+    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    assert info["is_success"], f"episode {episode}: lowest cloth point at {points[:, 2].min()}"
+
+
+def test_expert_in_eef_rel_mode():
+    env = RmbEnv(ClothTask(), cameras=(), action_mode="eef_rel")
+    try:
+        assert _run_expert(env, 3)["is_success"]
+    finally:
+        env.close()

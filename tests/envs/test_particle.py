@@ -1,0 +1,200 @@
+"""Particle: success criterion, worlds, particle model, stability, determinism, the expert."""
+
+import mujoco
+import numpy as np
+import pytest
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.experts.particle import ParticleExpert
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.particle import (
+    CASE_HEIGHT,
+    GOAL,
+    PARTICLE,
+    PARTICLE_RADIUS,
+    SCOOP,
+    SOURCE,
+    SOURCE_HALF_SIDE,
+    ParticleTask,
+    count_in_goal,
+)
+
+GOAL_CENTRE = ParticleTask.goal_pos  # RMB's: 4 cm below the table top
+ON_GOAL_FLOOR = np.array([*GOAL_CENTRE[:2], TABLE_TOP_Z + PARTICLE_RADIUS])
+
+
+@pytest.fixture(scope="module")
+def particle_env():
+    env = RmbEnv(ParticleTask(), cameras=())
+    yield env
+    env.close()
+
+
+def test_three_particles_in_the_goal_count_as_success():
+    inside = ON_GOAL_FLOOR + np.array([[0.0, 0.0, 0.0], [0.07, -0.07, 0.0], [-0.05, 0.06, 0.0]])
+    assert count_in_goal(inside, GOAL_CENTRE) == 3
+    assert count_in_goal(inside[:2], GOAL_CENTRE) == 2
+
+
+@pytest.mark.parametrize(
+    "where",
+    [
+        np.array([0.085, 0.0, 0.0]),  # beyond the +x wall
+        np.array([0.0, -0.085, 0.0]),  # beyond the -y wall
+        np.array([0.0, 0.0, CASE_HEIGHT + PARTICLE_RADIUS]),  # on a rim / held above the goal
+    ],
+)
+def test_particles_outside_the_goal_box_do_not_count(where):
+    assert count_in_goal((ON_GOAL_FLOOR + where)[None], GOAL_CENTRE) == 0
+
+
+def _put_particles(env: RmbEnv, positions: np.ndarray) -> None:
+    """Move the first ``len(positions)`` particles there (their slide joints hold the offset
+    from the body's build position)."""
+    model, data = env.model, env.data
+    for i, pos in enumerate(positions):
+        body = model.body(f"{PARTICLE}_{i}")
+        adr = model.jnt_qposadr[body.jntadr[0]]
+        data.qpos[adr : adr + 3] = pos - body.pos
+    mujoco.mj_forward(model, data)
+
+
+def test_is_success_reads_the_simulated_particles(particle_env):
+    particle_env.reset(seed=0, options={"world_idx": 2})
+    task, model, data = particle_env.task, particle_env.model, particle_env.data
+    assert not task.is_success(model, data)
+    targets = ON_GOAL_FLOOR + np.array([[-0.03, 0.0, 0.0], [0.0, 0.0, 0.0], [0.03, 0.0, 0.0]])
+    _put_particles(particle_env, targets[:2])
+    assert task.particle_positions(model, data)[:2] == pytest.approx(targets[:2])
+    assert not task.is_success(model, data)
+    _put_particles(particle_env, targets)
+    assert task.is_success(model, data)
+
+
+def test_particles_are_non_rotating_spheres_like_mujocos_composite(particle_env):
+    model = particle_env.model
+    assert ParticleTask().num_particles == 30
+    for i in (0, 29):
+        body = model.body(f"{PARTICLE}_{i}")
+        joints = range(body.jntadr[0], body.jntadr[0] + body.jntnum[0])
+        assert [model.jnt_type[j] for j in joints] == [mujoco.mjtJoint.mjJNT_SLIDE] * 3
+        assert model.geom_size[body.geomadr[0]][0] == PARTICLE_RADIUS
+
+
+@pytest.mark.parametrize("world_idx", [0, 5])
+def test_worlds_shift_the_source_and_its_particles_only(particle_env, world_idx):
+    _, info = particle_env.reset(seed=0, options={"world_idx": world_idx})
+    task, model, data = particle_env.task, particle_env.model, particle_env.data
+    offset = ParticleTask.world_offsets[world_idx]
+    source = ParticleTask.source_nominal_pos + offset
+    assert data.body(SOURCE).xpos == pytest.approx(source)
+    assert data.geom(f"{SOURCE}_px").xpos[:2] == pytest.approx(
+        source[:2] + np.array([SOURCE_HALF_SIDE, 0.0])
+    )
+    particles = task.particle_positions(model, data)
+    assert particles == pytest.approx(task.particle_start_positions(source))
+    assert np.all(np.abs(particles[:, :2] - source[:2]) < 0.115 - PARTICLE_RADIUS)
+    assert data.body(GOAL).xpos == pytest.approx(ParticleTask.goal_pos)
+    assert data.body(SCOOP).xpos == pytest.approx(ParticleTask.scoop_pos)
+    assert not info["is_success"]
+
+
+def test_worlds_span_rmbs_source_offsets():
+    assert ParticleTask.world_offsets[:, 1] == pytest.approx(np.linspace(0.0, 0.2, 6))
+    assert not ParticleTask.world_offsets[:, [0, 2]].any()
+
+
+def test_random_shift_is_bounded_planar_and_seeded(particle_env):
+    nominal = ParticleTask.source_nominal_pos + ParticleTask.world_offsets[3]
+    positions = []
+    for _ in range(2):
+        particle_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
+        positions.append(particle_env.data.body(SOURCE).xpos.copy())
+    shift = positions[0] - nominal
+    assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
+    assert shift[2] == 0.0
+    assert positions[1] == pytest.approx(positions[0])
+
+
+def test_start_pose_is_rmbs(particle_env):
+    obs, _ = particle_env.reset(seed=0)
+    assert obs["agent_pos"][:6] == pytest.approx(ParticleTask.home_arm_qpos, abs=1e-6)
+
+
+def test_resting_particles_stay_put_and_fall_asleep(particle_env):
+    particle_env.reset(seed=0, options={"world_idx": 1})
+    task, model, data = particle_env.task, particle_env.model, particle_env.data
+    start = task.particle_positions(model, data)
+    for _ in range(10):
+        particle_env.step(particle_env.home_command)
+    assert task.particle_positions(model, data) == pytest.approx(start, abs=1e-3)
+    particle_trees = model.body_treeid[[model.body(f"{PARTICLE}_{i}").id for i in range(30)]]
+    assert np.all(data.tree_asleep[particle_trees] >= 0)  # out of the solver until touched
+
+
+def test_random_actions_keep_the_simulation_stable():
+    env = RmbEnv(ParticleTask(), cameras=())
+    try:
+        env.action_space.seed(0)
+        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+        model = env.model
+        bodies = [model.body(f"{PARTICLE}_{i}") for i in range(30)] + [model.body(SCOOP)]
+        # The particles' slide joints and the scoop's linear velocity (the first three).
+        linear = np.concatenate([model.jnt_dofadr[b.jntadr[0]] + np.arange(3) for b in bodies])
+        fastest = 0.0
+        for _ in range(1000):
+            env.step(env.action_space.sample())
+            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+            fastest = max(fastest, float(np.abs(env.data.qvel[linear]).max()))
+        particles = env.task.particle_positions(model, env.data)
+    finally:
+        env.close()
+    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    assert np.all(np.abs(particles[:, :2]) < 2.0)  # still near the table (or on the floor)
+    assert np.all(particles[:, 2] > PARTICLE_RADIUS - 0.005)  # none fell through anything
+
+
+def test_same_seed_same_rollout(particle_env):
+    def rollout(seed: int) -> np.ndarray:
+        particle_env.reset(seed=seed, options={"random_shift": 0.03})
+        rng = np.random.default_rng(seed)
+        for _ in range(30):
+            action = particle_env.home_command + rng.normal(0.0, 0.05, 7)
+            action[-1] = 255.0 * rng.random()
+            particle_env.step(action.astype(np.float32))
+        return particle_env.data.qpos.copy()
+
+    first = rollout(3)
+    rollout(4)  # another episode in between: its sleeping state must not leak into the next
+    assert np.array_equal(rollout(3), first)
+
+
+def test_catalog_lists_the_particle_task():
+    assert TASKS["particle"] is ParticleTask and EXPERTS["particle"] is ParticleExpert
+
+
+def _run_expert(env: RmbEnv, episode: int) -> dict:
+    expert = ParticleExpert(env)
+    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
+    expert.reset()
+    info = {}
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        if terminated:
+            break
+    return info
+
+
+@pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest source
+def test_expert_scoops_particles_into_the_goal(particle_env, episode):
+    info = _run_expert(particle_env, episode)
+    positions = particle_env.task.particle_positions(particle_env.model, particle_env.data)
+    assert info["is_success"], f"episode {episode}: {count_in_goal(positions, GOAL_CENTRE)} in"
+
+
+def test_expert_in_eef_rel_mode():
+    env = RmbEnv(ParticleTask(), cameras=(), action_mode="eef_rel")
+    try:
+        assert _run_expert(env, 3)["is_success"]
+    finally:
+        env.close()

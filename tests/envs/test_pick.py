@@ -1,0 +1,198 @@
+"""Pick: instructions, success on constructed states, worlds, layouts, stability and the expert."""
+
+import mujoco
+import numpy as np
+import pytest
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.experts.pick import PickExpert
+from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
+from rmb_lerobot.envs.tasks.pick import (
+    BASKETS,
+    INSTRUCTIONS,
+    OBJECTS,
+    PickTask,
+    best_grasp_yaw,
+    layout_is_clear,
+)
+
+BANANA, CRACKER_BOX = OBJECTS[0], OBJECTS[1]
+BLUE, BLACK = BASKETS
+
+
+@pytest.fixture(scope="module")
+def pick_env():
+    env = RmbEnv(PickTask(), cameras=())
+    yield env
+    env.close()
+
+
+def _put(env: RmbEnv, obj, basket, offset=(0.0, 0.0, 0.0), speed: float = 0.0) -> None:
+    """Teleport ``obj`` upright to the basket floor (plus ``offset``) with a given x speed."""
+    joint = env.data.joint(obj.body)
+    floor = env.data.body(basket.body).xpos + np.array([0.0, 0.0, basket.floor])
+    joint.qpos[:3] = floor + np.asarray(offset)
+    joint.qvel[:] = 0.0
+    joint.qvel[0] = speed
+    mujoco.mj_kinematics(env.model, env.data)
+
+
+def test_eighteen_instructions_name_every_pair():
+    assert len(set(INSTRUCTIONS)) == 18 == len(OBJECTS) * len(BASKETS)
+    assert "Put the banana in the blue basket." in INSTRUCTIONS
+    assert {b.name for b in BASKETS} == {"blue basket", "black basket"}
+
+
+@pytest.mark.parametrize("instruction", ["Put the mug in the black basket.", INSTRUCTIONS[0]])
+def test_instruction_option_sets_the_task_description(pick_env, instruction):
+    pick_env.reset(seed=0, options={"instruction": instruction})
+    assert pick_env.task_description == instruction
+    assert pick_env.rmb_attrs()["task_desc"] == instruction
+
+
+def test_instruction_is_drawn_from_the_seed(pick_env):
+    drawn = []
+    for seed in (*range(12), 3):
+        pick_env.reset(seed=seed)
+        drawn.append(pick_env.task_description)
+    assert drawn[3] == drawn[-1]  # same seed, same instruction
+    assert set(drawn) <= set(INSTRUCTIONS) and len(set(drawn)) > 4
+
+
+def test_giving_the_instruction_keeps_the_seeds_layout(pick_env):
+    pick_env.reset(seed=5, options={"random_shift": 0.03})
+    free = pick_env.data.qpos.copy()
+    pick_env.reset(seed=5, options={"random_shift": 0.03, "instruction": INSTRUCTIONS[7]})
+    assert pick_env.data.qpos == pytest.approx(free)
+
+
+def test_lerobot_vector_env_gives_each_env_its_own_instruction():
+    """lerobot-eval reads ``task_description`` from every sub-env at every step."""
+    config = ENV_CONFIGS["rmb_ur5e_pick"](cameras=[])
+    vec = config.create_envs(n_envs=2)["rmb_ur5e_pick"][0]
+    try:
+        vec.reset(seed=[0, 1])
+        described = vec.call("task_description")
+    finally:
+        vec.close()
+    env = RmbEnv(PickTask(), cameras=())
+    try:
+        expected = []
+        for seed in (0, 1):
+            env.reset(seed=seed)
+            expected.append(env.task_description)
+    finally:
+        env.close()
+    assert list(described) == expected and expected[0] != expected[1]
+
+
+def test_unknown_instruction_is_rejected(pick_env):
+    with pytest.raises(ValueError, match="unknown instruction"):
+        pick_env.reset(seed=0, options={"instruction": "Put the cat in the hat."})
+
+
+@pytest.mark.parametrize(
+    ("obj", "basket", "offset", "speed", "expected"),
+    [
+        (BANANA, BLUE, (0.0, 0.0, 0.0), 0.0, True),  # named object resting in named basket
+        (BANANA, BLUE, (0.08, -0.1, 0.0), 0.0, True),  # off-centre, still inside the walls
+        (BANANA, BLUE, (0.0, 0.0, 0.0), 0.3, False),  # still moving (e.g. bouncing)
+        (BANANA, BLUE, (0.0, 0.0, 0.15), 0.0, False),  # held above the rim
+        (BANANA, BLUE, (0.11, 0.0, 0.0), 0.0, False),  # outside the wall
+        (BANANA, BLACK, (0.0, 0.0, 0.0), 0.0, False),  # right object, wrong basket
+        (CRACKER_BOX, BLUE, (0.0, 0.0, 0.0), 0.0, False),  # wrong object, right basket
+    ],
+)
+def test_success_criterion(pick_env, obj, basket, offset, speed, expected):
+    pick_env.reset(seed=0, options={"instruction": "Put the banana in the blue basket."})
+    assert not pick_env.task.is_success(pick_env.model, pick_env.data)
+    _put(pick_env, obj, basket, offset, speed)
+    assert pick_env.task.is_success(pick_env.model, pick_env.data) is expected
+
+
+@pytest.mark.parametrize("world_idx", [0, 5])
+def test_worlds_shift_the_baskets_only(pick_env, world_idx):
+    _, info = pick_env.reset(seed=0, options={"world_idx": world_idx})
+    shift = PickTask.world_offsets[world_idx]
+    assert shift[0] != 0.0 and not shift[1:].any()
+    for basket in BASKETS:
+        expected = np.array([*basket.pos, 0.0]) + shift
+        assert pick_env.data.body(basket.body).xpos[:2] == pytest.approx(expected[:2])
+    for obj in OBJECTS:
+        assert pick_env.data.body(obj.body).xpos[:2] == pytest.approx(obj.slot)
+    assert not info["is_success"]
+
+
+def test_random_shift_moves_objects_independently_and_is_seeded(pick_env):
+    layouts = []
+    for _ in range(2):
+        pick_env.reset(seed=11, options={"world_idx": 2, "random_shift": 0.03})
+        layouts.append(np.array([pick_env.data.body(o.body).xpos.copy() for o in OBJECTS]))
+    shifts = layouts[0][:, :2] - np.array([o.slot for o in OBJECTS])
+    assert np.all(np.abs(shifts) <= 0.03) and len(np.unique(shifts.round(6), axis=0)) == 9
+    assert layouts[0][:, 2] == pytest.approx(layouts[0][0, 2])  # all start on the table
+    assert layouts[1] == pytest.approx(layouts[0])
+    assert layout_is_clear(layouts[0][:, :2])
+
+
+def test_a_crowded_layout_is_not_clear():
+    positions = np.array([o.slot for o in OBJECTS])
+    assert layout_is_clear(positions)
+    positions[1] = positions[0] + [0.05, 0.0]  # cracker box against the banana
+    assert not layout_is_clear(positions)
+    # The banana can then only be grasped if no finger zone hits the box: it cannot.
+    assert best_grasp_yaw(0, positions) is None
+
+
+def test_random_actions_keep_the_simulation_stable():
+    env = RmbEnv(PickTask(), cameras=())
+    try:
+        env.reset(seed=0, options={"random_shift": 0.03})
+        env.action_space.seed(0)
+        fastest = 0.0
+        for _ in range(1000):
+            env.step(env.action_space.sample())
+            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+            speeds = [np.linalg.norm(env.data.joint(o.body).qvel[:3]) for o in OBJECTS]
+            fastest = max(fastest, *speeds)
+        heights = [env.data.body(o.body).xpos[2] for o in OBJECTS]
+    finally:
+        env.close()
+    # Swatted about by the arm (a bottle knocked onto the floor may roll far), never launched.
+    assert fastest < 10.0
+    assert min(heights) > -0.005  # nothing sank into the table or the floor
+
+
+def test_catalog_lists_pick():
+    assert TASKS["pick"] is PickTask and EXPERTS["pick"] is PickExpert
+
+
+def _run_expert(env: RmbEnv, seed: int, instruction: str) -> dict:
+    expert = PickExpert(env)
+    options = {"world_idx": seed % 6, "random_shift": 0.03, "instruction": instruction}
+    obs, _ = env.reset(seed=seed, options=options)
+    expert.reset()
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        assert np.all(np.isfinite(env.data.qpos))
+        if terminated:
+            break
+    return info
+
+
+@pytest.mark.parametrize(
+    ("seed", "instruction"),
+    [(0, "Put the cracker box in the black basket."), (5, "Put the banana in the blue basket.")],
+)
+def test_expert_puts_the_named_object_in_the_named_basket(pick_env, seed, instruction):
+    info = _run_expert(pick_env, seed, instruction)
+    task = pick_env.task
+    assert info["is_success"], f"{instruction}: {pick_env.data.body(task.target_object.body).xpos}"
+
+
+def test_expert_in_eef_rel_mode():
+    env = RmbEnv(PickTask(), cameras=(), action_mode="eef_rel")
+    try:
+        assert _run_expert(env, 3, "Put the apple in the black basket.")["is_success"]
+    finally:
+        env.close()

@@ -1,0 +1,207 @@
+"""Ring: success criterion on constructed rings, the closed rod, worlds, stability, the expert."""
+
+import mujoco
+import numpy as np
+import pytest
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.experts.ring import RingExpert
+from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
+from rmb_lerobot.envs.tasks.ring import (
+    HOOK_POS,
+    PEG1,
+    PEG2,
+    POLE,
+    POLE_HEIGHT,
+    RING,
+    RING_RADIUS,
+    SEAM,
+    SEGMENT_LENGTH,
+    SUCCESS_HEIGHT,
+    TUBE_RADIUS,
+    RingTask,
+    inside_polygon,
+    ring_on_pole,
+)
+
+POLE_BASE = RingTask.pole_nominal_pos
+LYING_Z = TABLE_TOP_Z + TUBE_RADIUS
+
+
+@pytest.fixture(scope="module")
+def ring_env():
+    env = RmbEnv(RingTask(), cameras=())
+    yield env
+    env.close()
+
+
+def _flat_ring(centre_xy: tuple[float, float], z: float = LYING_Z) -> np.ndarray:
+    angles = 2 * np.pi * np.arange(RingTask.num_segments) / RingTask.num_segments
+    x = centre_xy[0] + RING_RADIUS * np.cos(angles)
+    y = centre_xy[1] + RING_RADIUS * np.sin(angles)
+    return np.column_stack([x, y, np.full_like(x, z)])
+
+
+def test_ring_lying_around_the_pole_is_a_success():
+    assert ring_on_pole(_flat_ring((0.03, -0.02)), POLE_BASE)
+
+
+def test_ring_beside_the_pole_fails():
+    assert not ring_on_pole(_flat_ring((0.09, 0.0)), POLE_BASE)
+
+
+def test_ring_above_the_pole_top_fails():
+    top = POLE_BASE[2] + POLE_HEIGHT
+    assert not ring_on_pole(_flat_ring((0.0, 0.0), z=top + 0.001), POLE_BASE)
+    assert ring_on_pole(_flat_ring((0.0, 0.0), z=top - 0.001), POLE_BASE)
+
+
+def test_success_height_is_rmbs_pole_top():
+    # RMB: pole body origin + 0.08 m, its origin 2 cm below the table: the pole's top.
+    assert pytest.approx(POLE_HEIGHT) == SUCCESS_HEIGHT
+
+
+def test_one_raised_point_fails():
+    ring = _flat_ring((0.0, 0.0))
+    ring[4, 2] = POLE_BASE[2] + POLE_HEIGHT + 0.01  # tilted, one side above the pole's top
+    assert not ring_on_pole(ring, POLE_BASE)
+
+
+def test_polygon_test_handles_a_concave_ring():
+    square_u = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], float)
+    assert inside_polygon(square_u, np.array([0.5, 2.0]))
+    assert not inside_polygon(square_u, np.array([1.5, 2.0]))  # in the notch
+
+
+def test_ring_is_a_closed_elastic_rod(ring_env):
+    model, data = ring_env.model, ring_env.data
+    ring_env.reset(seed=0, options={"world_idx": 0})
+    flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, RING)
+    n = RingTask.num_segments
+    assert model.flex_dim[flex] == 1 and model.flex_vertnum[flex] == n + 1
+    assert model.flex_radius[flex] == TUBE_RADIUS
+    assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_DISCRETE
+    assert model.joint(f"{RING}_twist").type == mujoco.mjtJoint.mjJNT_HINGE  # rod twist DOFs
+    assert model.eq(SEAM).type == mujoco.mjtEq.mjEQ_CONNECT
+    vertices = data.flexvert_xpos[model.flex_vertadr[flex] :][: n + 1]
+    assert vertices[n] == pytest.approx(vertices[0])  # the seam closes the loop
+    edges = np.linalg.norm(np.diff(vertices, axis=0), axis=1)
+    assert edges == pytest.approx(SEGMENT_LENGTH)
+
+
+def test_ring_starts_hanging_on_the_hook(ring_env):
+    ring_env.reset(seed=0, options={"world_idx": 2})
+    points = ring_env.task.ring_points(ring_env.model, ring_env.data)
+    assert points[:, 0] == pytest.approx(HOOK_POS[0])  # in the vertical y-z plane
+    assert points.mean(axis=0)[1] == pytest.approx(HOOK_POS[1])
+    peg_top = HOOK_POS[2] + 0.01
+    assert points[0, 2] > peg_top + TUBE_RADIUS  # the top vertex is above the pegs
+    for _ in range(30):  # and the ring stays there
+        ring_env.step(ring_env.home_command)
+    moved = ring_env.task.ring_points(ring_env.model, ring_env.data) - points
+    assert np.abs(moved).max() < 0.005
+
+
+@pytest.mark.parametrize("world_idx", [0, 5])
+def test_worlds_shift_the_pole_only(ring_env, world_idx):
+    _, info = ring_env.reset(seed=0, options={"world_idx": world_idx})
+    offset = RingTask.world_offsets[world_idx]
+    assert ring_env.data.body(POLE).xpos == pytest.approx(POLE_BASE + offset)
+    assert ring_env.data.geom(PEG1).xpos[1:] == pytest.approx([-0.13, HOOK_POS[2]])
+    assert ring_env.data.geom(PEG2).xpos[1:] == pytest.approx([-0.17, HOOK_POS[2]])
+    assert not info["is_success"]
+
+
+def test_worlds_are_rmbs_pole_offsets():
+    assert RingTask.world_offsets[:, 1] == pytest.approx([-0.04, 0.08, 0.08, 0.12, 0.12, 0.24])
+    assert RingTask.world_offsets[:, 0] == pytest.approx([0.0, 0.04, -0.04, 0.04, -0.04, 0.0])
+
+
+def test_random_shift_is_bounded_planar_and_seeded(ring_env):
+    nominal = POLE_BASE + RingTask.world_offsets[3]
+    positions = []
+    for _ in range(2):
+        ring_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
+        positions.append(ring_env.data.body(POLE).xpos.copy())
+    shift = positions[0] - nominal
+    assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
+    assert shift[2] == 0.0
+    assert positions[1] == pytest.approx(positions[0])
+
+
+def test_start_pose_is_rmbs(ring_env):
+    obs, _ = ring_env.reset(seed=0)
+    assert obs["agent_pos"][:6] == pytest.approx(RingTask.home_arm_qpos, abs=1e-6)
+
+
+def test_random_actions_keep_the_simulation_stable():
+    env = RmbEnv(RingTask(), cameras=())
+    try:
+        env.action_space.seed(0)
+        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+        slide = np.concatenate(
+            [
+                env.model.jnt_dofadr[env.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
+                for i in range(RingTask.num_segments + 1)
+            ]
+        )
+        fastest = 0.0
+        for _ in range(1000):
+            env.step(env.action_space.sample())
+            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+            fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
+        points = env.task.ring_points(env.model, env.data)
+    finally:
+        env.close()
+    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    closed = np.vstack([points, points[:1]])
+    edges = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+    assert edges == pytest.approx(SEGMENT_LENGTH, rel=0.1)  # inextensible, seam closed
+    # The arm may knock the ring off the hook and even off the table, but not through a surface.
+    assert points[:, 2].min() > 0.5 * TUBE_RADIUS
+
+
+def test_same_seed_same_rollout(ring_env):
+    def rollout() -> np.ndarray:
+        ring_env.reset(seed=3, options={"random_shift": 0.03})
+        rng = np.random.default_rng(3)
+        for _ in range(30):
+            action = ring_env.home_command + rng.normal(0.0, 0.05, 7)
+            action[-1] = 255.0 * rng.random()
+            ring_env.step(action.astype(np.float32))
+        return ring_env.data.qpos.copy()
+
+    first = rollout()
+    ring_env.reset(seed=4)
+    assert np.array_equal(rollout(), first)
+
+
+def test_catalog_lists_the_ring():
+    assert TASKS["ring"] is RingTask and EXPERTS["ring"] is RingExpert
+
+
+def _run_expert(env: RmbEnv, episode: int) -> dict:
+    expert = RingExpert(env)
+    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
+    expert.reset()
+    info = {}
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        if terminated:
+            break
+    return info
+
+
+@pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest pole
+def test_expert_puts_the_ring_on_the_pole(ring_env, episode):
+    info = _run_expert(ring_env, episode)
+    points = ring_env.task.ring_points(ring_env.model, ring_env.data)
+    assert info["is_success"], f"episode {episode}: ring centre at {points.mean(axis=0)}"
+
+
+def test_expert_in_eef_rel_mode():
+    env = RmbEnv(RingTask(), cameras=(), action_mode="eef_rel")
+    try:
+        assert _run_expert(env, 3)["is_success"]
+    finally:
+        env.close()
