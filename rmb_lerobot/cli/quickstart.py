@@ -197,8 +197,8 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--episodes", type=int, default=30, help="demonstrations to collect")
     parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
     parser.add_argument("--image-size", nargs=2, type=int, default=[64, 64], metavar=("W", "H"))
-    parser.add_argument("--steps", type=int, default=1500, help="training steps")
-    parser.add_argument("--batch-size", type=int, default=16)
+    parser.add_argument("--steps", type=int, default=1000, help="training steps")
+    parser.add_argument("--batch-size", type=int, default=8)
     parser.add_argument("--eval-episodes", type=int, default=12)
     parser.add_argument(
         "--episode-length", type=int, default=None, help="eval step limit (default: the task's)"
