@@ -13,12 +13,13 @@ export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
 VENV := .venv
 STAMP := $(VENV)/.synced
 
-.PHONY: help setup demo test lint format bench clean
+.PHONY: help setup demo test lint format bench bench-learning clean
 
 help:
 	@echo "make demo   - the main job (quick start)"
 	@echo "make test   - lint + the test suite"
 	@echo "make bench  - benchmarks (results go to benchmarks/RESULTS.md by hand)"
+	@echo "make bench-learning - train and evaluate every policy from scripted demos (about 1 h+)"
 
 # Re-sync whenever the lock or the project metadata changes.
 $(STAMP): pyproject.toml uv.lock .python-version
@@ -44,6 +45,14 @@ format: $(STAMP)
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/depth_codecs.py
+	$(VENV)/bin/python benchmarks/env_step.py
+	$(VENV)/bin/python benchmarks/expert_success.py
+	$(VENV)/bin/python benchmarks/convert.py
+	$(VENV)/bin/python benchmarks/loader.py
+	$(VENV)/bin/python benchmarks/policies.py
+
+bench-learning: $(STAMP)
+	$(VENV)/bin/python benchmarks/learning.py
 
 clean:
 	rm -rf outputs .pytest_cache
