@@ -145,3 +145,77 @@ class ScriptedExpert(ABC):
         else:
             action = np.append(relative_pose(self.env.command_eef_pose, pose), gripper)
         return action.astype(np.float32)
+
+
+class GripperExpert(ScriptedExpert):
+    """Base of the experts that grasp with the gripper's pinch point as the tool point.
+
+    The gripper logic the tasks share: wait until the fingers have settled on closing or opening
+    (:meth:`_gripper_settled`), restore the cruise speed at every reset (phases may slow the
+    reference down), and, for precise placing, track the hand's speed (:meth:`_track_tool_speed`
+    once per :meth:`waypoint`) to tell when it is at rest (:meth:`_arrived`) and approach the
+    last centimetres slowly (:meth:`_slowly`). Subclasses extend :meth:`on_reset` (calling it
+    first) and may override :meth:`measured_tool` to move the tool point onto a held object.
+    """
+
+    open_gripper, closed_gripper = 0.0, 255.0
+    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
+    settle_tol = 0.5  # gripper value change per step that counts as settled
+    still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
+    # The last ``slow_zone`` of an approach with :meth:`_slowly` is done slowly, so the hand
+    # arrives at rest (the integral correction does not overshoot) and sets things down softly.
+    slow_zone = 0.03  # m
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        super().__init__(env, **kwargs)
+        self._cruise_step = self.max_step
+
+    def on_reset(self) -> None:
+        """Cruise speed, gripper settling and tool speed reset; the pinch point's offset in the
+        eef frame measured (it depends on the gripper model only)."""
+        self.max_step = self._cruise_step
+        self._count = 0
+        self._last_gripper = 0.0
+        eef_pos, eef_rot = self.eef_world()
+        self._offset = eef_rot.inv().apply(self.pinch_point() - eef_pos)
+        self._last_tool = self.pinch_point()
+        self._tool_speed = 0.0
+
+    def pinch_point(self) -> np.ndarray:
+        """Measured world position of the gripper's pinch point (the TCP site)."""
+        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+
+    def tool_offset(self) -> np.ndarray:
+        return self._offset
+
+    def measured_tool(self) -> np.ndarray:
+        return self.pinch_point()
+
+    def _gripper_settled(self) -> bool:
+        """Called once a step while closing or opening (reset ``_count`` to 0 when a new gripper
+        command starts): true once the command has run ``min_gripper_steps`` and the fingers
+        have stopped moving, i.e. they hold the object or are fully open."""
+        self._count += 1
+        gripper = self.env.measured_joint_pos()[-1]
+        settled = abs(gripper - self._last_gripper) < self.settle_tol
+        self._last_gripper = gripper
+        return self._count >= self.min_gripper_steps and settled
+
+    def _track_tool_speed(self) -> None:
+        """Update the measured tool speed from the last call (call once a step)."""
+        tool = self.measured_tool()
+        self._tool_speed = float(np.linalg.norm(tool - self._last_tool)) / self.dt
+        self._last_tool = tool
+
+    def _arrived(self, target: np.ndarray, tol: float) -> bool:
+        """Reference and hand at ``target`` and the hand at rest."""
+        return self.reached(target, tol) and self._tool_speed < self.still_speed
+
+    def _slowly(self, target: np.ndarray, speed: float) -> np.ndarray:
+        """``target``, but approached at ``speed`` once the reference is within the slow zone."""
+        delta = target - self._ref_pos
+        dist = np.linalg.norm(delta)
+        step = speed * self.dt
+        if dist > self.slow_zone or dist <= step:
+            return target
+        return self._ref_pos + delta * (step / dist)

@@ -25,10 +25,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-from typing import Any
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.cable import CABLE_END, END_BOX_HALF_SIZE, POLE1, POLE2
 from scipy.spatial.transform import Rotation
@@ -59,7 +58,7 @@ def _yaw(rot: np.ndarray) -> float:
     return float(np.arctan2(rot[1, 0], rot[0, 0]))
 
 
-class CableExpert(ScriptedExpert):
+class CableExpert(GripperExpert):
     """Tool point: the gripper's pinch point, ``grasp_dz`` above the box centre once grasped."""
 
     approach_height = 0.06  # pre-grasp height of the pinch point above the grasp point (m)
@@ -72,34 +71,17 @@ class CableExpert(ScriptedExpert):
     end_below = 0.07  # the box ends this far below the pole line (success: 0.05, m)
     drag_speed, lift_speed, final_speed = 0.15, 0.1, 0.1  # m/s
     half_circle_points = 6
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
-
-    def __init__(self, env: Any, **kwargs: Any) -> None:
-        super().__init__(env, **kwargs)
-        self._cruise_step = self.max_step
 
     def on_reset(self) -> None:
-        self.max_step = self._cruise_step
+        super().on_reset()
         self.phase = Phase.ABOVE
-        self._count = 0
-        self._last_gripper = 0.0
         self._route: list[Leg] = []
         self._leg = 0
-        site = self.env.data.site(self.env.robot.tcp_site)
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        _, eef_rot = self.eef_world()
         box_rot = self.env.data.body(CABLE_END).xmat.reshape(3, 3)
         self._box_yaw0 = _yaw(box_rot)
         self._yaw = self._box_yaw0
         self._grasp_rot = top_down_rotation(box_rot[:, 1], eef_rot)
-
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
-
-    def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
 
     # ------------------------------------------------------------------ helpers
     def _hand_rotation(self, heading: float) -> Rotation:
@@ -107,13 +89,6 @@ class CableExpert(ScriptedExpert):
         taking the shorter way from the last commanded heading."""
         self._yaw += (heading - self._yaw + np.pi) % (2 * np.pi) - np.pi
         return Rotation.from_euler("z", self._yaw - self._box_yaw0) * self._grasp_rot
-
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
 
     def plan_route(self) -> list[Leg]:
         """The legs of steps 2-5 for the current box and pole positions."""

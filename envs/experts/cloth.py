@@ -29,7 +29,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint
 from rmb_lerobot.envs.tasks.cloth import BOARD, BOARD_HALF_SIZE, CLOTH_COLUMNS, CLOTH_ROWS
 from scipy.spatial.transform import Rotation
 
@@ -56,7 +56,7 @@ def pointing(approach: np.ndarray, closing: np.ndarray) -> Rotation:
     return Rotation.from_matrix(np.column_stack([x, np.cross(z, x), z]))
 
 
-class ClothExpert(ScriptedExpert):
+class ClothExpert(GripperExpert):
     """Tool point: the gripper's pinch point."""
 
     behind = 0.1  # pre-grasp distance on the robot's side of the sheet (m)
@@ -66,17 +66,11 @@ class ClothExpert(ScriptedExpert):
     over_height = 0.07  # pinch point above the board's top while carrying (m)
     beyond = 0.01  # release point beyond the board's far edge (m)
     retreat_height = 0.1  # straight up after letting go, so the fingers do not drag the cloth (m)
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10
-    settle_tol = 0.5
 
     def on_reset(self) -> None:
+        super().on_reset()
         self.phase = Phase.BEHIND
-        self._count = 0
-        self._last_gripper = 0.0
-        site = self.env.data.site(self.env.robot.tcp_site)
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        _, eef_rot = self.eef_world()
         board = self.env.data.body(BOARD)
         rot = board.xmat.reshape(3, 3)
         self._board = board.xpos.copy()
@@ -96,23 +90,10 @@ class ClothExpert(ScriptedExpert):
         self._hem = self._hem_middle()  # the cloth hangs at rest: plan the grasp once
         self._hold = self._hem + np.array([0.0, 0.0, self.grasp_depth])
 
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
-
-    def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
-
     def _hem_middle(self) -> np.ndarray:
         points = self.env.task.cloth_points(self.env.model, self.env.data)
         bottom = points[(CLOTH_ROWS - 1) * CLOTH_COLUMNS :]
         return bottom.mean(axis=0)
-
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
 
     def _board_frame(self, across: float, along: float, up: float) -> np.ndarray:
         return self._board + across * self._across + along * self._along + np.array([0, 0, up])

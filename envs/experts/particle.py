@@ -21,10 +21,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-from typing import Any
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.particle import (
     CASE_WALL_HALF_THICKNESS,
@@ -59,7 +58,7 @@ class Phase(Enum):
     ROUTE = "route"
 
 
-class ParticleExpert(ScriptedExpert):
+class ParticleExpert(GripperExpert):
     """Tool point: the pinch point until the handle is grasped, then the scoop's plate centre."""
 
     clear_height = 0.05  # first move: straight up from the start pose, off the handle (m)
@@ -74,49 +73,26 @@ class ParticleExpert(ScriptedExpert):
     pour_back = 0.04  # plate centre this far before (-x) the goal's centre when pouring (m)
     travel_speed, lower_speed, push_speed, lift_speed = 0.15, 0.08, 0.05, 0.05  # m/s
     back_extent = PAD_HALF_WIDTH - HANDLE_POS[0]  # plate centre to the back of the pads (m)
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10  # steps of closing before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
-
-    def __init__(self, env: Any, **kwargs: Any) -> None:
-        super().__init__(env, **kwargs)
-        self._cruise_step = self.max_step
 
     def on_reset(self) -> None:
-        self.max_step = self._cruise_step
+        super().on_reset()
         self.phase = Phase.CLEAR
-        self._count = 0
-        self._last_gripper = 0.0
         self._route: list[Leg] = []
         self._leg = 0
         self._on_scoop = False
         self._hold = np.zeros(3)  # pinch target while closing
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(self._pinch() - eef_pos)
-        self._clear = self._pinch() + np.array([0.0, 0.0, self.clear_height])
+        _, eef_rot = self.eef_world()
+        self._clear = self.pinch_point() + np.array([0.0, 0.0, self.clear_height])
         self._grasp_rot = top_down_rotation(np.array([1.0, 0.0, 0.0]), eef_rot)
-
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
 
     def measured_tool(self) -> np.ndarray:
         if self._on_scoop:
             return self.env.data.body(SCOOP).xpos.copy()
-        return self._pinch()
+        return self.pinch_point()
 
     # ------------------------------------------------------------------ helpers
-    def _pinch(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
-
     def _grasp_point(self) -> np.ndarray:
         return self.env.data.geom(SCOOP_HANDLE).xpos + np.array([0, 0, self.grasp_above_centre])
-
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
 
     def _take_scoop(self) -> None:
         """Switch the tool point to the scoop's plate centre. The reference jumps to the

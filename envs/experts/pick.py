@@ -15,7 +15,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.pick import FINGER_REACH, PickTask, best_grasp_yaw, grasp_yaws
 
@@ -31,7 +31,7 @@ class Phase(Enum):
     RETREAT = "retreat"
 
 
-class PickExpert(ScriptedExpert):
+class PickExpert(GripperExpert):
     """Tool point: the gripper's pinch point."""
 
     approach_height = 0.05  # pinch point above the tallest object on the way to a grasp (m)
@@ -39,19 +39,13 @@ class PickExpert(ScriptedExpert):
     path_margin = 0.02  # objects nearer the carrying path than this (plus sizes) count (m)
     wall_margin = 0.015  # object's side to the basket's near wall at the drop point (m)
     drop_height = 0.01  # object base above the basket floor when let go (m)
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
-    still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
-    slow_zone = 0.03  # the last part of the descent / lowering is done slowly (m)
     grasp_speed, place_speed = 0.05, 0.05  # m/s
 
     def on_reset(self) -> None:
+        super().on_reset()
         task: PickTask = self.env.task
         data = self.env.data
         self.phase = Phase.ABOVE
-        self._count = 0
-        self._last_gripper = 0.0
         self._grasp = np.zeros(3)  # pinch target while closing
         self._place = np.zeros(3)  # pinch target while lowering into the basket
         self._release = np.zeros(3)  # pinch target while opening
@@ -61,22 +55,12 @@ class PickExpert(ScriptedExpert):
         positions = np.array([data.body(o.body).xpos[:2] for o in task.objects])
         yaw = best_grasp_yaw(index, positions, task.objects)
         yaw = grasp_yaws(self._obj)[0] if yaw is None else yaw
-        site = data.site(self.env.robot.tcp_site)
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        _, eef_rot = self.eef_world()
         self._rot = top_down_rotation(np.array([np.cos(yaw), np.sin(yaw), 0.0]), eef_rot)
         tallest = max(o.height for o in task.objects)
         self._transit_z = TABLE_TOP_Z + tallest + self.approach_height
         self._carry_base_z = self._carry_height(positions, index)
         self._drop = self._drop_xy()
-        self._last_tool = site.xpos.copy()
-        self._tool_speed = 0.0
-
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
-
-    def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
 
     # ------------------------------------------------------------------ helpers
     def _carry_height(self, positions: np.ndarray, index: int) -> float:
@@ -110,26 +94,6 @@ class PickExpert(ScriptedExpert):
         body = self.env.data.body(self._obj.body)
         return body.xpos + body.xmat.reshape(3, 3) @ np.asarray(self._obj.grasp)
 
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
-
-    def _arrived(self, target: np.ndarray, tol: float) -> bool:
-        """Reference and hand at ``target`` and the hand at rest."""
-        return self.reached(target, tol) and self._tool_speed < self.still_speed
-
-    def _slowly(self, target: np.ndarray, speed: float) -> np.ndarray:
-        """``target``, but approached at ``speed`` once the reference is within the slow zone."""
-        delta = target - self._ref_pos
-        dist = np.linalg.norm(delta)
-        step = speed * self.dt
-        if dist > self.slow_zone or dist <= step:
-            return target
-        return self._ref_pos + delta * (step / dist)
-
     def _over_basket(self, base_z: float) -> np.ndarray:
         """Pinch target that puts the object's base centre over the drop point at ``base_z``."""
         data = self.env.data
@@ -142,9 +106,7 @@ class PickExpert(ScriptedExpert):
 
     # ------------------------------------------------------------------ phases
     def waypoint(self) -> Waypoint:
-        tool = self.measured_tool()
-        self._tool_speed = float(np.linalg.norm(tool - self._last_tool)) / self.dt
-        self._last_tool = tool
+        self._track_tool_speed()
         if self.phase is Phase.ABOVE:
             grasp = self._grasp_point()
             # Above the tallest object: the way there may pass over any of them.

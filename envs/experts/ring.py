@@ -19,10 +19,9 @@ expert adapts to every world, random shift and to how the ring sits in the grasp
 from __future__ import annotations
 
 from enum import Enum
-from typing import Any
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.ring import POLE, POLE_HEIGHT, RING_RADIUS, TUBE_RADIUS
 from scipy.spatial.transform import Rotation
@@ -44,7 +43,7 @@ class Phase(Enum):
     RETREAT = "retreat"
 
 
-class RingExpert(ScriptedExpert):
+class RingExpert(GripperExpert):
     """Tool point: the gripper's pinch point."""
 
     approach_distance = 0.08  # pre-grasp distance of the pinch point before the ring (m)
@@ -58,22 +57,11 @@ class RingExpert(ScriptedExpert):
     laydown_points = 5
     nudge = 0.04  # after letting go, the hand moves this far outwards to push the ring over (m)
     approach_speed, lower_speed = 0.08, 0.06  # m/s
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
-
-    def __init__(self, env: Any, **kwargs: Any) -> None:
-        super().__init__(env, **kwargs)
-        self._cruise_step = self.max_step
 
     def on_reset(self) -> None:
-        self.max_step = self._cruise_step
+        super().on_reset()
         self.phase = Phase.ALIGN
-        self._count = 0
-        self._last_gripper = 0.0
-        site = self.env.data.site(self.env.robot.tcp_site)
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        _, eef_rot = self.eef_world()
         # Hand along +x with the fingers closing vertically (the nearer of the two such rolls).
         close = np.array([0.0, 0.0, 1.0])
         if close @ eef_rot.apply([1.0, 0.0, 0.0]) < 0:
@@ -95,12 +83,6 @@ class RingExpert(ScriptedExpert):
         self._hold = np.zeros(3)
         self._laydown: list[np.ndarray] = []
 
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
-
-    def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
-
     # ------------------------------------------------------------------ helpers
     def _ring(self) -> np.ndarray:
         return self.env.task.ring_points(self.env.model, self.env.data)
@@ -110,13 +92,6 @@ class RingExpert(ScriptedExpert):
         points = self._ring()
         lowest = points[np.argsort(points[:, 2])[:2]]
         return lowest.mean(axis=0) + np.array([self.grasp_depth, 0.0, 0.0])
-
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
 
     def _pole(self) -> np.ndarray:
         return self.env.data.body(POLE).xpos.copy()

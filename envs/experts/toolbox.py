@@ -16,7 +16,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
-from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.toolbox import HANDLE, MAT, MAT_TOP, TOOLBOX
 from scipy.spatial.transform import Rotation
 
@@ -32,68 +32,30 @@ class Phase(Enum):
     RETREAT = "retreat"
 
 
-class ToolboxExpert(ScriptedExpert):
+class ToolboxExpert(GripperExpert):
     """Tool point: the gripper's pinch point."""
 
     approach_height = 0.08  # pre-grasp height of the pinch point above the bar (m)
     grasp_depth = 0.0  # pinch point below the bar's axis when closing (m)
     carry_clearance = 0.06  # toolbox bottom above the mat top while carrying (m)
     place_height = 0.0005  # toolbox bottom above the mat top at the end of lowering (m)
-    open_gripper, closed_gripper = 0.0, 255.0
-    min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
-    still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
-    # The last ``slow_zone`` of the descent to the bar and of the lowering onto the mat is
-    # done slowly, so the hand arrives at rest (no overshoot) and sets the box down softly.
-    slow_zone = 0.03
-    grasp_speed, place_speed = 0.05, 0.03  # m/s
+    grasp_speed, place_speed = 0.05, 0.03  # m/s: the last ``slow_zone`` to the bar, the mat
 
     def on_reset(self) -> None:
+        super().on_reset()
         self.phase = Phase.ABOVE
-        self._count = 0
-        self._last_gripper = 0.0
         self._grasp = np.zeros(3)  # pinch target while closing
         self._place = np.zeros(3)  # pinch target while lowering onto the mat
         self._release = np.zeros(3)  # pinch target while opening
-        site = self.env.data.site(self.env.robot.tcp_site)
-        eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        _, eef_rot = self.eef_world()
         self._rot = self._grasp_rotation(eef_rot)
-        self._last_tool = site.xpos.copy()
-        self._tool_speed = 0.0
 
     def _grasp_rotation(self, current: Rotation) -> Rotation:
         """Fingers across the handle bar (perpendicular to its axis in the horizontal plane)."""
         bar_axis = self.env.data.geom(HANDLE).xmat.reshape(3, 3)[:, 1]
         return top_down_rotation(np.cross([0.0, 0.0, 1.0], bar_axis), current)
 
-    def tool_offset(self) -> np.ndarray:
-        return self._offset
-
-    def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
-
     # ------------------------------------------------------------------ helpers
-    def _gripper_settled(self) -> bool:
-        self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
-        settled = abs(gripper - self._last_gripper) < self.settle_tol
-        self._last_gripper = gripper
-        return self._count >= self.min_gripper_steps and settled
-
-    def _arrived(self, target: np.ndarray, tol: float) -> bool:
-        """Reference and hand at ``target`` and the hand at rest."""
-        return self.reached(target, tol) and self._tool_speed < self.still_speed
-
-    def _slowly(self, target: np.ndarray, speed: float) -> np.ndarray:
-        """``target``, but approached at ``speed`` once the reference is within the slow zone."""
-        delta = target - self._ref_pos
-        dist = np.linalg.norm(delta)
-        step = speed * self.dt
-        if dist > self.slow_zone or dist <= step:
-            return target
-        return self._ref_pos + delta * (step / dist)
-
     def _over_mat(self, bottom_above_mat_top: float) -> np.ndarray:
         """Pinch target that puts the toolbox origin over the mat centre at the given height."""
         data = self.env.data
@@ -107,9 +69,7 @@ class ToolboxExpert(ScriptedExpert):
 
     # ------------------------------------------------------------------ phases
     def waypoint(self) -> Waypoint:
-        tool = self.measured_tool()
-        self._tool_speed = float(np.linalg.norm(tool - self._last_tool)) / self.dt
-        self._last_tool = tool
+        self._track_tool_speed()
         grasp = self.env.data.geom(HANDLE).xpos - np.array([0.0, 0.0, self.grasp_depth])
         if self.phase is Phase.ABOVE:
             target = grasp + np.array([0.0, 0.0, self.approach_height])

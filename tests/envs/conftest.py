@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.tasks.insert import InsertTask
@@ -21,3 +22,74 @@ def camera_env():
     env = RmbEnv(InsertTask(), cameras=("front", "hand"), image_size=(64, 48), depth=True)
     yield env
     env.close()
+
+
+@pytest.fixture
+def make_env():
+    """``make_env(task, **kwargs)``: a physics-only ``RmbEnv`` for one test, closed afterwards
+    (for envs a module-scoped fixture cannot share, e.g. another action mode)."""
+    envs = []
+
+    def make(task, **kwargs) -> RmbEnv:
+        envs.append(RmbEnv(task, cameras=(), **kwargs))
+        return envs[-1]
+
+    yield make
+    for env in envs:
+        env.close()
+
+
+def _run_expert(env: RmbEnv, expert_class: type, episode: int, **options) -> dict:
+    expert = expert_class(env)
+    options = {"world_idx": episode % 6, "random_shift": 0.03, **options}
+    obs, _ = env.reset(seed=episode, options=options)
+    expert.reset()
+    info = {}
+    for _ in range(env.task.max_episode_steps):
+        obs, _, terminated, _, info = env.step(expert(obs))
+        assert np.all(np.isfinite(env.data.qpos))
+        if terminated:
+            break
+    return info
+
+
+@pytest.fixture
+def run_expert():
+    """``run_expert(env, ExpertClass, episode, **options) -> info``: one expert episode as the
+    benchmarks run it (seed ``episode``, world ``episode % 6``, 3 cm random shift; ``options``
+    add or override reset options), until the task ends; returns the last step's info."""
+    return _run_expert
+
+
+def _random_actions(env: RmbEnv, steps: int = 1000, seed: int = 0):
+    env.action_space.seed(seed)
+    for step in range(steps):
+        env.step(env.action_space.sample())
+        assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
+        yield step
+
+
+@pytest.fixture
+def random_actions():
+    """``for _ in random_actions(env, steps=1000, seed=0)``: steps the (already reset) env with
+    seeded uniformly random actions, checking the state stays finite, and yields after each
+    step so that a stability test can watch the simulation as it goes."""
+    return _random_actions
+
+
+def _random_rollout(env: RmbEnv, seed: int, steps: int = 30) -> np.ndarray:
+    env.reset(seed=seed, options={"random_shift": 0.03})
+    rng = np.random.default_rng(seed)
+    for _ in range(steps):
+        action = env.home_command + rng.normal(0.0, 0.05, 7)
+        action[-1] = 255.0 * rng.random()
+        env.step(action.astype(np.float32))
+    return env.data.qpos.copy()
+
+
+@pytest.fixture
+def random_rollout():
+    """``random_rollout(env, seed, steps=30) -> qpos``: reset with ``seed`` (random world and
+    shift), then small seeded random moves around the home pose with random gripper commands;
+    the final qpos, for determinism tests."""
+    return _random_rollout

@@ -157,75 +157,45 @@ def test_start_pose_is_rmbs(cable_env):
     assert obs["agent_pos"][:6] == pytest.approx(CableTask.home_arm_qpos, abs=1e-6)
 
 
-def test_random_actions_keep_the_simulation_stable():
-    env = RmbEnv(CableTask(), cameras=())
-    try:
-        env.action_space.seed(0)
-        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
-        slide = np.concatenate(
-            [
-                env.model.jnt_dofadr[env.model.body(f"{CABLE}_{i}").jntadr[0]] + np.arange(3)
-                for i in range(1, CableTask.num_vertices - 2)
-            ]
-        )
-        fastest = 0.0
-        for _ in range(1000):
-            env.step(env.action_space.sample())
-            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-            fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
-        points = env.task.cable_points(env.model, env.data)
-        edges = np.linalg.norm(np.diff(points, axis=0), axis=1)
-        spacing = CABLE_LENGTH / (CableTask.num_vertices - 1)
-    finally:
-        env.close()
+def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
+    env = make_env(CableTask())
+    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+    slide = np.concatenate(
+        [
+            env.model.jnt_dofadr[env.model.body(f"{CABLE}_{i}").jntadr[0]] + np.arange(3)
+            for i in range(1, CableTask.num_vertices - 2)
+        ]
+    )
+    fastest = 0.0
+    for _ in random_actions(env):
+        fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
+    points = env.task.cable_points(env.model, env.data)
+    edges = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    spacing = CABLE_LENGTH / (CableTask.num_vertices - 1)
     assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
     assert edges == pytest.approx(spacing, rel=0.1)
     assert points[:, 2].min() > TABLE_TOP_Z  # the cable has not fallen through the table
 
 
-def test_same_seed_same_rollout(cable_env):
-    def rollout() -> np.ndarray:
-        cable_env.reset(seed=3, options={"random_shift": 0.03})
-        rng = np.random.default_rng(3)
-        for _ in range(30):
-            action = cable_env.home_command + rng.normal(0.0, 0.05, 7)
-            action[-1] = 255.0 * rng.random()
-            cable_env.step(action.astype(np.float32))
-        return cable_env.data.qpos.copy()
-
-    first = rollout()
+def test_same_seed_same_rollout(cable_env, random_rollout):
+    first = random_rollout(cable_env, seed=3)
     cable_env.reset(seed=4)
-    assert np.array_equal(rollout(), first)
+    assert np.array_equal(random_rollout(cable_env, seed=3), first)
 
 
 def test_catalog_lists_the_cable():
     assert TASKS["cable"] is CableTask and EXPERTS["cable"] is CableExpert
 
 
-def _run_expert(env: RmbEnv, episode: int) -> dict:
-    expert = CableExpert(env)
-    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
-    expert.reset()
-    info = {}
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest poles
-def test_expert_routes_the_cable(cable_env, episode):
-    info = _run_expert(cable_env, episode)
+def test_expert_routes_the_cable(cable_env, run_expert, episode):
+    info = run_expert(cable_env, CableExpert, episode)
     assert info["is_success"], f"episode {episode}: end at {cable_env.data.body(CABLE_END).xpos}"
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(CableTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 3)["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(CableTask(), action_mode="eef_rel")
+    assert run_expert(env, CableExpert, 3)["is_success"]
 
 
 def test_lerobot_train_with_cable_env_type_on_expert_demos(

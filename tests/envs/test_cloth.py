@@ -163,24 +163,18 @@ def _edge_lengths(env: RmbEnv) -> np.ndarray:
     return np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
 
 
-def test_random_actions_keep_the_simulation_stable():
-    env = RmbEnv(ClothTask(), cameras=())
-    try:
-        env.action_space.seed(0)
-        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
-        rest = _edge_lengths(env)
-        first_free = env.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
-        cloth_dofs = slice(first_free, first_free + 3 * (NUM_POINTS - CLOTH_COLUMNS))
-        fastest, stretch = 0.0, []
-        for _ in range(1000):
-            env.step(env.action_space.sample())
-            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-            fastest = max(fastest, float(np.abs(env.data.qvel[cloth_dofs]).max()))
-            stretch.append(float((_edge_lengths(env) / rest).max()))
-        board = env.data.geom(BOARD).xpos.copy()
-        top_row = env.task.cloth_points(env.model, env.data)[:CLOTH_COLUMNS]
-    finally:
-        env.close()
+def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
+    env = make_env(ClothTask())
+    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+    rest = _edge_lengths(env)
+    first_free = env.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
+    cloth_dofs = slice(first_free, first_free + 3 * (NUM_POINTS - CLOTH_COLUMNS))
+    fastest, stretch = 0.0, []
+    for _ in random_actions(env):
+        fastest = max(fastest, float(np.abs(env.data.qvel[cloth_dofs]).max()))
+        stretch.append(float((_edge_lengths(env) / rest).max()))
+    board = env.data.geom(BOARD).xpos.copy()
+    top_row = env.task.cloth_points(env.model, env.data)[:CLOTH_COLUMNS]
     assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
     # Random joint targets slam the arm into the cloth and the board at full speed: an edge
     # squeezed between them stretches for a moment, but never far, and springs back.
@@ -189,47 +183,23 @@ def test_random_actions_keep_the_simulation_stable():
     assert np.linalg.norm(top_row - board, axis=1).max() < 0.25  # still hanging from the board
 
 
-def test_same_seed_same_rollout(cloth_env):
-    def rollout() -> np.ndarray:
-        cloth_env.reset(seed=3, options={"random_shift": 0.03})
-        rng = np.random.default_rng(3)
-        for _ in range(30):
-            action = cloth_env.home_command + rng.normal(0.0, 0.05, 7)
-            action[-1] = 255.0 * rng.random()
-            cloth_env.step(action.astype(np.float32))
-        return cloth_env.data.qpos.copy()
-
-    first = rollout()
+def test_same_seed_same_rollout(cloth_env, random_rollout):
+    first = random_rollout(cloth_env, seed=3)
     cloth_env.reset(seed=4)
-    assert np.array_equal(rollout(), first)
+    assert np.array_equal(random_rollout(cloth_env, seed=3), first)
 
 
 def test_catalog_lists_the_cloth():
     assert TASKS["cloth"] is ClothTask and EXPERTS["cloth"] is ClothExpert
 
 
-def _run_expert(env: RmbEnv, episode: int) -> dict:
-    expert = ClothExpert(env)
-    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
-    expert.reset()
-    info = {}
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize("episode", [0, 5])  # the cloth nearest the robot's right and left
-def test_expert_lifts_the_cloth_onto_the_board(cloth_env, episode):
-    info = _run_expert(cloth_env, episode)
+def test_expert_lifts_the_cloth_onto_the_board(cloth_env, run_expert, episode):
+    info = run_expert(cloth_env, ClothExpert, episode)
     points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
     assert info["is_success"], f"episode {episode}: lowest cloth point at {points[:, 2].min()}"
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(ClothTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 3)["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(ClothTask(), action_mode="eef_rel")
+    assert run_expert(env, ClothExpert, 3)["is_success"]

@@ -132,69 +132,40 @@ def test_resting_particles_stay_put_and_fall_asleep(particle_env):
     assert np.all(data.tree_asleep[particle_trees] >= 0)  # out of the solver until touched
 
 
-def test_random_actions_keep_the_simulation_stable():
-    env = RmbEnv(ParticleTask(), cameras=())
-    try:
-        env.action_space.seed(0)
-        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
-        model = env.model
-        bodies = [model.body(f"{PARTICLE}_{i}") for i in range(30)] + [model.body(SCOOP)]
-        # The particles' slide joints and the scoop's linear velocity (the first three).
-        linear = np.concatenate([model.jnt_dofadr[b.jntadr[0]] + np.arange(3) for b in bodies])
-        fastest = 0.0
-        for _ in range(1000):
-            env.step(env.action_space.sample())
-            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-            fastest = max(fastest, float(np.abs(env.data.qvel[linear]).max()))
-        particles = env.task.particle_positions(model, env.data)
-    finally:
-        env.close()
+def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
+    env = make_env(ParticleTask())
+    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+    model = env.model
+    bodies = [model.body(f"{PARTICLE}_{i}") for i in range(30)] + [model.body(SCOOP)]
+    # The particles' slide joints and the scoop's linear velocity (the first three).
+    linear = np.concatenate([model.jnt_dofadr[b.jntadr[0]] + np.arange(3) for b in bodies])
+    fastest = 0.0
+    for _ in random_actions(env):
+        fastest = max(fastest, float(np.abs(env.data.qvel[linear]).max()))
+    particles = env.task.particle_positions(model, env.data)
     assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
     assert np.all(np.abs(particles[:, :2]) < 2.0)  # still near the table (or on the floor)
     assert np.all(particles[:, 2] > PARTICLE_RADIUS - 0.005)  # none fell through anything
 
 
-def test_same_seed_same_rollout(particle_env):
-    def rollout(seed: int) -> np.ndarray:
-        particle_env.reset(seed=seed, options={"random_shift": 0.03})
-        rng = np.random.default_rng(seed)
-        for _ in range(30):
-            action = particle_env.home_command + rng.normal(0.0, 0.05, 7)
-            action[-1] = 255.0 * rng.random()
-            particle_env.step(action.astype(np.float32))
-        return particle_env.data.qpos.copy()
-
-    first = rollout(3)
-    rollout(4)  # another episode in between: its sleeping state must not leak into the next
-    assert np.array_equal(rollout(3), first)
+def test_same_seed_same_rollout(particle_env, random_rollout):
+    first = random_rollout(particle_env, seed=3)
+    # Another episode in between: its sleeping state must not leak into the next.
+    random_rollout(particle_env, seed=4)
+    assert np.array_equal(random_rollout(particle_env, seed=3), first)
 
 
 def test_catalog_lists_the_particle_task():
     assert TASKS["particle"] is ParticleTask and EXPERTS["particle"] is ParticleExpert
 
 
-def _run_expert(env: RmbEnv, episode: int) -> dict:
-    expert = ParticleExpert(env)
-    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
-    expert.reset()
-    info = {}
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest source
-def test_expert_scoops_particles_into_the_goal(particle_env, episode):
-    info = _run_expert(particle_env, episode)
+def test_expert_scoops_particles_into_the_goal(particle_env, run_expert, episode):
+    info = run_expert(particle_env, ParticleExpert, episode)
     positions = particle_env.task.particle_positions(particle_env.model, particle_env.data)
     assert info["is_success"], f"episode {episode}: {count_in_goal(positions, GOAL_CENTRE)} in"
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(ParticleTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 3)["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(ParticleTask(), action_mode="eef_rel")
+    assert run_expert(env, ParticleExpert, 3)["is_success"]

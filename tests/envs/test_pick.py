@@ -144,20 +144,14 @@ def test_a_crowded_layout_is_not_clear():
     assert best_grasp_yaw(0, positions) is None
 
 
-def test_random_actions_keep_the_simulation_stable():
-    env = RmbEnv(PickTask(), cameras=())
-    try:
-        env.reset(seed=0, options={"random_shift": 0.03})
-        env.action_space.seed(0)
-        fastest = 0.0
-        for _ in range(1000):
-            env.step(env.action_space.sample())
-            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-            speeds = [np.linalg.norm(env.data.joint(o.body).qvel[:3]) for o in OBJECTS]
-            fastest = max(fastest, *speeds)
-        heights = [env.data.body(o.body).xpos[2] for o in OBJECTS]
-    finally:
-        env.close()
+def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
+    env = make_env(PickTask())
+    env.reset(seed=0, options={"random_shift": 0.03})
+    fastest = 0.0
+    for _ in random_actions(env):
+        speeds = [np.linalg.norm(env.data.joint(o.body).qvel[:3]) for o in OBJECTS]
+        fastest = max(fastest, *speeds)
+    heights = [env.data.body(o.body).xpos[2] for o in OBJECTS]
     # Swatted about by the arm (a bottle knocked onto the floor may roll far), never launched.
     assert fastest < 10.0
     assert min(heights) > -0.005  # nothing sank into the table or the floor
@@ -167,32 +161,17 @@ def test_catalog_lists_pick():
     assert TASKS["pick"] is PickTask and EXPERTS["pick"] is PickExpert
 
 
-def _run_expert(env: RmbEnv, seed: int, instruction: str) -> dict:
-    expert = PickExpert(env)
-    options = {"world_idx": seed % 6, "random_shift": 0.03, "instruction": instruction}
-    obs, _ = env.reset(seed=seed, options=options)
-    expert.reset()
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        assert np.all(np.isfinite(env.data.qpos))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize(
     ("seed", "instruction"),
     [(0, "Put the cracker box in the black basket."), (5, "Put the banana in the blue basket.")],
 )
-def test_expert_puts_the_named_object_in_the_named_basket(pick_env, seed, instruction):
-    info = _run_expert(pick_env, seed, instruction)
+def test_expert_puts_the_named_object_in_the_named_basket(pick_env, run_expert, seed, instruction):
+    info = run_expert(pick_env, PickExpert, seed, instruction=instruction)
     task = pick_env.task
     assert info["is_success"], f"{instruction}: {pick_env.data.body(task.target_object.body).xpos}"
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(PickTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 3, "Put the apple in the black basket.")["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(PickTask(), action_mode="eef_rel")
+    info = run_expert(env, PickExpert, 3, instruction="Put the apple in the black basket.")
+    assert info["is_success"]

@@ -134,25 +134,19 @@ def test_start_pose_is_rmbs(ring_env):
     assert obs["agent_pos"][:6] == pytest.approx(RingTask.home_arm_qpos, abs=1e-6)
 
 
-def test_random_actions_keep_the_simulation_stable():
-    env = RmbEnv(RingTask(), cameras=())
-    try:
-        env.action_space.seed(0)
-        env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
-        slide = np.concatenate(
-            [
-                env.model.jnt_dofadr[env.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
-                for i in range(RingTask.num_segments + 1)
-            ]
-        )
-        fastest = 0.0
-        for _ in range(1000):
-            env.step(env.action_space.sample())
-            assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-            fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
-        points = env.task.ring_points(env.model, env.data)
-    finally:
-        env.close()
+def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
+    env = make_env(RingTask())
+    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+    slide = np.concatenate(
+        [
+            env.model.jnt_dofadr[env.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
+            for i in range(RingTask.num_segments + 1)
+        ]
+    )
+    fastest = 0.0
+    for _ in random_actions(env):
+        fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
+    points = env.task.ring_points(env.model, env.data)
     assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
     closed = np.vstack([points, points[:1]])
     edges = np.linalg.norm(np.diff(closed, axis=0), axis=1)
@@ -161,47 +155,23 @@ def test_random_actions_keep_the_simulation_stable():
     assert points[:, 2].min() > 0.5 * TUBE_RADIUS
 
 
-def test_same_seed_same_rollout(ring_env):
-    def rollout() -> np.ndarray:
-        ring_env.reset(seed=3, options={"random_shift": 0.03})
-        rng = np.random.default_rng(3)
-        for _ in range(30):
-            action = ring_env.home_command + rng.normal(0.0, 0.05, 7)
-            action[-1] = 255.0 * rng.random()
-            ring_env.step(action.astype(np.float32))
-        return ring_env.data.qpos.copy()
-
-    first = rollout()
+def test_same_seed_same_rollout(ring_env, random_rollout):
+    first = random_rollout(ring_env, seed=3)
     ring_env.reset(seed=4)
-    assert np.array_equal(rollout(), first)
+    assert np.array_equal(random_rollout(ring_env, seed=3), first)
 
 
 def test_catalog_lists_the_ring():
     assert TASKS["ring"] is RingTask and EXPERTS["ring"] is RingExpert
 
 
-def _run_expert(env: RmbEnv, episode: int) -> dict:
-    expert = RingExpert(env)
-    obs, _ = env.reset(seed=episode, options={"world_idx": episode % 6, "random_shift": 0.03})
-    expert.reset()
-    info = {}
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest pole
-def test_expert_puts_the_ring_on_the_pole(ring_env, episode):
-    info = _run_expert(ring_env, episode)
+def test_expert_puts_the_ring_on_the_pole(ring_env, run_expert, episode):
+    info = run_expert(ring_env, RingExpert, episode)
     points = ring_env.task.ring_points(ring_env.model, ring_env.data)
     assert info["is_success"], f"episode {episode}: ring centre at {points.mean(axis=0)}"
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(RingTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 3)["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(RingTask(), action_mode="eef_rel")
+    assert run_expert(env, RingExpert, 3)["is_success"]

@@ -78,29 +78,14 @@ def test_catalog_lists_the_toolbox():
     assert TASKS["toolbox"] is ToolboxTask and EXPERTS["toolbox"] is ToolboxExpert
 
 
-def _run_expert(env: RmbEnv, world: int) -> dict:
-    expert = ToolboxExpert(env)
-    obs, _ = env.reset(seed=world, options={"world_idx": world, "random_shift": 0.03})
-    expert.reset()
-    for _ in range(env.task.max_episode_steps):
-        obs, _, terminated, _, info = env.step(expert(obs))
-        assert np.all(np.isfinite(env.data.qpos))
-        if terminated:
-            break
-    return info
-
-
 @pytest.mark.parametrize("world", [0, 5])
-def test_expert_places_the_toolbox_on_the_mat(toolbox_env, world):
-    info = _run_expert(toolbox_env, world)
+def test_expert_places_the_toolbox_on_the_mat(toolbox_env, run_expert, world):
+    info = run_expert(toolbox_env, ToolboxExpert, world)  # seed = world
     upright = toolbox_env.data.body(TOOLBOX).xmat.reshape(3, 3)[2, 2]
     assert info["is_success"], f"world {world}: toolbox at {toolbox_env.data.body(TOOLBOX).xpos}"
     assert upright > np.cos(np.deg2rad(5.0))
 
 
-def test_expert_in_eef_rel_mode():
-    env = RmbEnv(ToolboxTask(), cameras=(), action_mode="eef_rel")
-    try:
-        assert _run_expert(env, 2)["is_success"]
-    finally:
-        env.close()
+def test_expert_in_eef_rel_mode(make_env, run_expert):
+    env = make_env(ToolboxTask(), action_mode="eef_rel")
+    assert run_expert(env, ToolboxExpert, 2)["is_success"]
