@@ -36,8 +36,10 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
 
+# Two workers, one torch/OpenMP thread each (subprocesses inherit it): more threads than free
+# cores makes OpenMP crawl.
 test: lint
-	$(VENV)/bin/python -m pytest -n 2 --durations=15
+	OMP_NUM_THREADS=1 $(VENV)/bin/python -m pytest -n 2 --durations=15
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .

@@ -26,6 +26,8 @@ from pathlib import Path
 
 from rmb_lerobot.envs.registry import entry_for
 
+TORCH_THREADS = 1  # per stage process, unless OMP_NUM_THREADS is set
+
 # The LeRobot entry points, by their console-script names (what the printed commands show).
 LEROBOT_MODULES = {
     "lerobot-train": "lerobot.scripts.lerobot_train",
@@ -158,6 +160,9 @@ def run(stage: Stage, index: int, total: int) -> float:
     """Run one stage with its output shown live; stop the pipeline if it fails."""
     print(f"\n=== [{index}/{total}] {stage}\n", flush=True)
     env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
+    # One torch thread per process: training already runs next to a video-decoding data
+    # worker, and OpenMP threads that outnumber the free cores slow down many-fold.
+    env.setdefault("OMP_NUM_THREADS", str(TORCH_THREADS))
     start = time.perf_counter()
     result = subprocess.run(stage.argv(), env=env, check=False)
     if result.returncode != 0:
