@@ -3,12 +3,14 @@
 Usage::
 
     .venv/bin/python benchmarks/learning.py [--env insert] [--episodes 50]
-        [--policies act mlp sarnn dp3] [--steps 2000] [--eval-episodes 5] [--out outputs/learning]
+        [--policies act mlp sarnn dp3] [--steps N] [--batch-size B] [--eval-episodes 5]
+        [--out outputs/learning]
 
 Collects ``--episodes`` expert demonstrations (worlds cycled 0..5, front + hand cameras 64x64
 with depth), converts them twice (RGB for act/mlp/sarnn; front depth for dp3), trains each
-policy with the unmodified ``lerobot-train`` for ``--steps`` (the bounded CPU budget: one
-torch thread per run, two runs side by side on two cores) and evaluates the last checkpoint
+policy with the unmodified ``lerobot-train`` within a bounded CPU budget (each recipe's steps x
+batch, about the same CPU time per policy; one torch thread per run, two runs side by side on
+two cores) and evaluates the last checkpoint
 with ``lerobot-eval`` ``--eval-episodes`` times in each world 0..5 (``--env.world_idx``).
 Prints a markdown table for benchmarks/RESULTS.md. Stages whose output exists are skipped, so
 an interrupted run resumes.
@@ -35,18 +37,23 @@ CAMERAS = ("front", "hand")
 
 @dataclass(frozen=True)
 class Recipe:
-    """How one policy is trained: its dataset (RGB or depth), its options, its env inputs."""
+    """How one policy is trained: its dataset (RGB or depth), its options, its env inputs, and
+    its budget (steps x batch), sized so that each run costs roughly the same CPU time."""
 
     dataset: str
     policy_args: tuple[str, ...]
     env_args: tuple[str, ...]
+    steps: int = 1000
+    batch_size: int = 16
 
 
 RGB_ENV = (f"--env.cameras=[{','.join(CAMERAS)}]",)
 RECIPES = {
     "act": Recipe("rgb", ACT_CPU_ARGS, RGB_ENV),  # the main job's ACT
     "mlp": Recipe("rgb", ("--policy.optimizer_lr=1e-4",), RGB_ENV),
-    "sarnn": Recipe("rgb", (), RGB_ENV),
+    # A SARNN sample is a whole 21-frame window (RMB trains on sequences): 200 x 8 windows is
+    # about the CPU time of 1000 x 16 single frames for ACT or MLP on this machine.
+    "sarnn": Recipe("rgb", (), RGB_ENV, steps=200, batch_size=8),
     "dp3": Recipe("depth", (), ("--env.cameras=[front]", "--env.depth=true")),
 }
 
@@ -104,6 +111,7 @@ def env_args(args: argparse.Namespace, recipe: Recipe) -> list[str]:
 
 def train_stage(args: argparse.Namespace, policy: str) -> Stage:
     recipe = RECIPES[policy]
+    steps = args.steps or recipe.steps
     return Stage(
         "lerobot-train",
         [
@@ -115,10 +123,10 @@ def train_stage(args: argparse.Namespace, policy: str) -> Stage:
             "--policy.push_to_hub=false",
             *env_args(args, recipe),
             "--env_eval_freq=0",
-            f"--steps={args.steps}",
-            f"--batch_size={args.batch_size}",
-            f"--save_freq={args.steps}",
-            f"--log_freq={max(1, args.steps // 20)}",
+            f"--steps={steps}",
+            f"--batch_size={args.batch_size or recipe.batch_size}",
+            f"--save_freq={steps}",
+            f"--log_freq={max(1, steps // 20)}",
             "--num_workers=0",
             "--seed=1",
             f"--output_dir={args.out / 'train' / policy}",
@@ -159,13 +167,15 @@ def train_and_evaluate(args: argparse.Namespace, policy: str) -> dict:
 
 
 def table(results: list[dict], args: argparse.Namespace) -> str:
-    header = "| policy | train steps | train min | " + " | ".join(f"w{w}" for w in WORLDS)
+    header = "| policy | steps x batch | train min | " + " | ".join(f"w{w}" for w in WORLDS)
     lines = [header + " | all worlds |", "|---|---:|---:|" + "---:|" * len(WORLDS) + "---:|"]
     for r in results:
+        recipe = RECIPES[r["policy"]]
+        budget = f"{args.steps or recipe.steps} x {args.batch_size or recipe.batch_size}"
         minutes = "-" if r["train_s"] is None else f"{r['train_s'] / 60:.1f}"
         worlds = " | ".join(f"{s:.0f} %" for s in r["per_world"])
         mean = sum(r["per_world"]) / len(r["per_world"])
-        lines.append(f"| {r['policy']} | {args.steps} | {minutes} | {worlds} | {mean:.0f} % |")
+        lines.append(f"| {r['policy']} | {budget} | {minutes} | {worlds} | {mean:.0f} % |")
     return "\n".join(lines)
 
 
@@ -174,8 +184,8 @@ def main() -> None:
     parser.add_argument("--env", default="insert")
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--policies", nargs="+", default=list(RECIPES), choices=list(RECIPES))
-    parser.add_argument("--steps", type=int, default=2000)
-    parser.add_argument("--batch-size", type=int, default=16)
+    parser.add_argument("--steps", type=int, default=None, help="all policies (default: own)")
+    parser.add_argument("--batch-size", type=int, default=None, help="all policies")
     parser.add_argument("--eval-episodes", type=int, default=5, help="per world")
     parser.add_argument("--parallel", type=int, default=2, help="policies trained side by side")
     parser.add_argument("--out", type=Path, default=Path("outputs/learning"))
@@ -189,7 +199,7 @@ def main() -> None:
         results = list(pool.map(lambda p: train_and_evaluate(args, p), args.policies))
     print(
         f"\n{args.episodes} demos of {entry_for(args.env).rmb_env_name}, {SIZE}x{SIZE} images, "
-        f"batch {args.batch_size}, {args.eval_episodes} eval episodes per world; "
+        f"{args.eval_episodes} eval episodes per world; "
         f"wall {(time.perf_counter() - start) / 60:.0f} min\n"
     )
     print(table(results, args))
