@@ -3,9 +3,12 @@
 Usage::
 
     .venv/bin/python benchmarks/expert_success.py [--episodes 100] [--random-shift 0.03]
-        [--tasks insert door] [--action-mode joint]
+        [--tasks insert door] [--action-mode joint] [--cycle-instructions]
 
-Episode ``i`` uses ``world_idx = i % 6`` and seed ``i``; physics only (no cameras).
+Episode ``i`` uses ``world_idx = i % 6`` and seed ``i``; physics only (no cameras). With
+``--cycle-instructions`` (Pick) episode ``i`` gets instruction ``(i // 6) % 18``, as
+``rmb-collect --cycle-instructions`` records them, and the success rate per instruction is
+printed too.
 """
 
 from __future__ import annotations
@@ -17,14 +20,19 @@ from rmb_lerobot.envs.base import ACTION_MODES, RmbEnv
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 
 
-def success_rate(task: str, episodes: int, random_shift: float, action_mode: str) -> dict:
+def success_rate(
+    task: str, episodes: int, random_shift: float, action_mode: str, cycle: bool = False
+) -> dict:
     env = RmbEnv(TASKS[task](), cameras=(), action_mode=action_mode)
     expert = EXPERTS[task](env)
+    variants = env.task.episode_variants() if cycle else ()
     successes, steps, failed = 0, 0, []
+    per_variant: dict[str, list[bool]] = {}
     for episode in range(episodes):
-        obs, _ = env.reset(
-            seed=episode, options={"world_idx": episode % 6, "random_shift": random_shift}
-        )
+        options = {"world_idx": episode % 6, "random_shift": random_shift}
+        if variants:  # as rmb-collect --cycle-instructions: each variant across the worlds
+            options.update(variants[(episode // 6) % len(variants)])
+        obs, _ = env.reset(seed=episode, options=options)
         expert.reset()
         env_steps = 0
         for env_steps in range(1, env.task.max_episode_steps + 1):  # noqa: B007 - used below
@@ -36,12 +44,14 @@ def success_rate(task: str, episodes: int, random_shift: float, action_mode: str
             successes += 1
         else:
             failed.append(episode)
+        per_variant.setdefault(env.task_description, []).append(bool(info["is_success"]))
     env.close()
     return {
         "rate": successes / episodes,
         "successes": successes,
         "mean_steps": steps / episodes,
         "failed": failed,
+        "per_variant": per_variant,
     }
 
 
@@ -51,17 +61,27 @@ def main() -> None:
     parser.add_argument("--random-shift", type=float, default=0.03, help="metres")
     parser.add_argument("--tasks", nargs="+", default=sorted(TASKS), choices=sorted(TASKS))
     parser.add_argument("--action-mode", default="joint", choices=ACTION_MODES)
+    parser.add_argument(
+        "--cycle-instructions",
+        action="store_true",
+        help="pick: every instruction in turn, each across the worlds; prints per instruction",
+    )
     args = parser.parse_args()
     print("| task | episodes | success rate | mean steps | seconds | failed episodes |")
     print("|------|----------|--------------|------------|---------|-----------------|")
     for task in args.tasks:
         start = time.perf_counter()
-        result = success_rate(task, args.episodes, args.random_shift, args.action_mode)
+        result = success_rate(
+            task, args.episodes, args.random_shift, args.action_mode, args.cycle_instructions
+        )
         seconds = time.perf_counter() - start
         print(
             f"| {task} | {args.episodes} | {result['rate']:.1%} | {result['mean_steps']:.0f} | "
             f"{seconds:.0f} | {result['failed'] or '-'} |"
         )
+        if args.cycle_instructions:
+            for text, outcomes in sorted(result["per_variant"].items()):
+                print(f"|   {text} | {len(outcomes)} | {sum(outcomes) / len(outcomes):.1%} | | | |")
 
 
 if __name__ == "__main__":

@@ -38,6 +38,9 @@ class CollectConfig:
     seed: int = 0
     depth_codec: str = "rmb-videoio"
     overwrite: bool = False
+    # Cycle through the task's variants (Pick's 18 instructions) instead of drawing one per
+    # episode from the seed: episodes i..i+len(world_idx)-1 share a variant, across the worlds.
+    cycle_variants: bool = False
 
     def episode_path(self, index: int, world_idx: int) -> Path:
         entry = entry_for(self.env)
@@ -72,6 +75,7 @@ class Collector:
             random_shift=config.random_shift,
         )
         self.expert = entry.load_expert_class()(self.env)
+        self.variants = self.env.task.episode_variants() if config.cycle_variants else ()
 
     def record(self, index: int) -> EpisodeResult:
         """Record episode ``index``: world ``world_idx[index % len]``, seeds from ``seed``."""
@@ -79,13 +83,15 @@ class Collector:
         world_idx = config.world_idx[index % len(config.world_idx)]
         attempts = config.max_attempts if config.success_only else 1
         result = EpisodeResult(index, None, False, 0, 0, world_idx)
+        options = {"world_idx": world_idx}
+        if self.variants:
+            variant = (index // len(config.world_idx)) % len(self.variants)
+            options.update(self.variants[variant])
         for attempt in range(attempts):
             # Distinct seeds for every (episode, attempt) pair, reproducible for the config.
             seed = config.seed + index + attempt * config.episodes
             result.attempts = attempt + 1
-            success, steps = self._record_once(
-                config.episode_path(index, world_idx), seed, world_idx
-            )
+            success, steps = self._record_once(config.episode_path(index, world_idx), seed, options)
             result.success, result.steps = success, steps
             if success or not config.success_only:
                 result.path = config.episode_path(index, world_idx)
@@ -93,9 +99,9 @@ class Collector:
             result.failures.append(seed)
         return result
 
-    def _record_once(self, path: Path, seed: int, world_idx: int) -> tuple[bool, int]:
+    def _record_once(self, path: Path, seed: int, options: dict) -> tuple[bool, int]:
         env, config = self.env, self.config
-        obs, info = env.reset(seed=seed, options={"world_idx": world_idx})
+        obs, info = env.reset(seed=seed, options=options)
         self.expert.reset()
         attrs = {**env.rmb_attrs(), "demo_name": path.stem}
         writer = EpisodeWriter(

@@ -40,6 +40,11 @@ class Task(ABC):
         task's instruction, which then becomes :attr:`description`). ``options`` holds the
         reset options named in :attr:`reset_options` that were given."""
 
+    def episode_variants(self) -> tuple[dict[str, Any], ...]:
+        """Every variant a dataset should cover evenly, as reset options (e.g. one per
+        instruction of a language-conditioned task); empty for single-variant tasks."""
+        return ()
+
     @abstractmethod
     def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
         """Add the task's bodies, equalities and contact exclusions to the scene spec."""

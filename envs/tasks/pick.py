@@ -458,6 +458,10 @@ class PickTask(Task):
         self.target_basket = self.baskets[index % len(self.baskets)]
         self.description = INSTRUCTIONS[index]
 
+    def episode_variants(self) -> tuple[dict[str, Any], ...]:
+        """The 18 instructions (RMB's dataset holds the same number of demos of each)."""
+        return tuple({"instruction": text} for text in INSTRUCTIONS)
+
     def world_offset(
         self, world_idx: int, rng: np.random.Generator | None = None, random_shift: float = 0.0
     ) -> np.ndarray:

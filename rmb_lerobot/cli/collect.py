@@ -42,6 +42,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--depth-codec", default="rmb-videoio", choices=sorted(DEPTH_CODECS))
     parser.add_argument("--overwrite", action="store_true", help="replace existing episodes")
+    parser.add_argument(
+        "--cycle-instructions",
+        action="store_true",
+        help="language-conditioned tasks (pick): cover every instruction evenly, each across "
+        "the worlds, instead of drawing one per episode from the seed",
+    )
     return parser
 
 
@@ -70,6 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             seed=args.seed,
             depth_codec=args.depth_codec,
             overwrite=args.overwrite,
+            cycle_variants=args.cycle_instructions,
         )
         kept = successes = 0
         with tqdm(total=args.episodes, desc=f"collect {args.env}", unit="episode") as bar:

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.collect import CollectConfig, collect
 from rmb_lerobot.envs.experts.pick import PickExpert
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
 from rmb_lerobot.envs.tasks.pick import (
@@ -15,6 +16,8 @@ from rmb_lerobot.envs.tasks.pick import (
     best_grasp_yaw,
     layout_is_clear,
 )
+
+from rmb_lerobot import open_episode
 
 BANANA, CRACKER_BOX = OBJECTS[0], OBJECTS[1]
 BLUE, BLACK = BASKETS
@@ -175,3 +178,17 @@ def test_expert_in_eef_rel_mode(make_env, run_expert):
     env = make_env(PickTask(), action_mode="eef_rel")
     info = run_expert(env, PickExpert, 3, instruction="Put the apple in the black basket.")
     assert info["is_success"]
+
+
+def test_collect_can_cover_every_instruction_evenly(tmp_path):
+    # rmb-collect --cycle-instructions: each instruction in turn, across the worlds given
+    # (RMB's Pick dataset has the same number of demos per instruction).
+    config = CollectConfig(
+        "pick", tmp_path, episodes=3, world_idx=(1, 4), cameras=(), cycle_variants=True
+    )
+    results = list(collect(config))
+    descriptions = []
+    for result in sorted(results, key=lambda r: r.index):
+        with open_episode(result.path) as episode:
+            descriptions.append((episode.attrs["task_desc"], episode.attrs["world_idx"]))
+    assert descriptions == [(INSTRUCTIONS[0], 1), (INSTRUCTIONS[0], 4), (INSTRUCTIONS[1], 1)]
