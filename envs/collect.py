@@ -145,6 +145,11 @@ def _record_in_worker(index: int) -> EpisodeResult:
 
 def collect(config: CollectConfig, workers: int = 1) -> Iterator[EpisodeResult]:
     """Record ``config.episodes`` episodes, yielding each result as it finishes."""
+    if config.cycle_variants and not entry_for(config.env).load_task_class()().episode_variants():
+        raise ValueError(
+            f"{entry_for(config.env).rmb_env_name} has one variant only: nothing to cycle "
+            "(--cycle-instructions is for language-conditioned tasks such as pick)"
+        )
     config.out.mkdir(parents=True, exist_ok=True)
     indices: Sequence[int] = range(config.episodes)
     if workers <= 1:

@@ -192,3 +192,10 @@ def test_collect_can_cover_every_instruction_evenly(tmp_path):
         with open_episode(result.path) as episode:
             descriptions.append((episode.attrs["task_desc"], episode.attrs["world_idx"]))
     assert descriptions == [(INSTRUCTIONS[0], 1), (INSTRUCTIONS[0], 4), (INSTRUCTIONS[1], 1)]
+
+
+def test_cycling_instructions_of_a_task_without_any_is_refused(tmp_path):
+    config = CollectConfig("insert", tmp_path / "out", episodes=1, cameras=(), cycle_variants=True)
+    with pytest.raises(ValueError, match="MujocoUR5eInsert has one variant only"):
+        next(collect(config))
+    assert not (tmp_path / "out").exists()

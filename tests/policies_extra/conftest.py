@@ -70,6 +70,20 @@ def to_policy_batch(state, action, images, length: int) -> dict[str, torch.Tenso
 
 
 @pytest.fixture
+def observation():
+    """``observation(batch, seed)``: a random state + front-camera observation batch."""
+
+    def _observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
+        g = torch.Generator().manual_seed(seed)
+        return {
+            "observation.state": torch.randn(batch, STATE_DIM, generator=g),
+            FRONT: torch.rand(batch, *IMAGE, generator=g),
+        }
+
+    return _observation
+
+
+@pytest.fixture
 def windows():
     """``windows(length, phase)``: every window of one synthetic episode, as a policy batch."""
 

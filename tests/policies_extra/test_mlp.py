@@ -25,14 +25,6 @@ def make_policy(features, **overrides) -> MLPPolicy:
     )
 
 
-def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
-    g = torch.Generator().manual_seed(seed)
-    return {
-        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
-        FRONT: torch.rand(batch, *IMAGE, generator=g),
-    }
-
-
 def test_mlp_is_our_policy_type_and_found_by_lerobots_convention():
     assert "mlp" in registered_policy_types()
     assert PreTrainedConfig.get_choice_class("mlp") is MLPConfig
@@ -68,7 +60,7 @@ def test_only_rgb_cameras_feed_the_resnet(features):
         raise AssertionError("a 1-channel camera must be rejected")
 
 
-def test_shapes_and_a_training_step(features):
+def test_shapes_and_a_training_step(features, observation):
     policy = make_policy(features, n_obs_steps=2, chunk_size=4, n_action_steps=2)
     params = policy.get_optim_params()
     assert isinstance(params, list) and all(isinstance(p, torch.nn.Parameter) for p in params)
@@ -85,7 +77,7 @@ def test_shapes_and_a_training_step(features):
     assert loss.ndim == 0 and torch.isfinite(loss) and info["mse_loss"] == loss.item()
 
 
-def test_padded_actions_do_not_count(features):
+def test_padded_actions_do_not_count(features, observation):
     policy = make_policy(features, chunk_size=3, n_action_steps=3)
     batch = {**observation(2), "action": torch.zeros(2, 3, ACTION_DIM)}
     batch["action_is_pad"] = torch.tensor([[False, False, True], [False, True, True]])
@@ -94,7 +86,7 @@ def test_padded_actions_do_not_count(features):
     assert torch.allclose(policy.forward(batch)[0], loss)
 
 
-def test_overfits_a_tiny_batch(features):
+def test_overfits_a_tiny_batch(features, observation):
     # The ResNet is frozen only to keep this CPU test fast (Adam over its 11M weights costs
     # ~0.5 s a step on 2 shared cores); the step above trains it, and its features still feed
     # the head here. Frozen weights must drop out of the optimizer's parameters.
@@ -114,7 +106,7 @@ def test_overfits_a_tiny_batch(features):
     assert losses[-1] < 0.25 * losses[0], losses
 
 
-def test_select_action_runs_the_queue_of_a_chunk(features):
+def test_select_action_runs_the_queue_of_a_chunk(features, observation):
     policy = make_policy(features, n_obs_steps=2, chunk_size=4, n_action_steps=2)
     obs = observation(2)
     policy.reset()
@@ -129,7 +121,7 @@ def test_select_action_runs_the_queue_of_a_chunk(features):
     torch.testing.assert_close(policy.select_action(obs), actions[0])
 
 
-def test_save_load_round_trip_gives_identical_actions(features, tmp_path):
+def test_save_load_round_trip_gives_identical_actions(features, tmp_path, observation):
     policy = make_policy(features, chunk_size=2, n_action_steps=1)
     stats = {
         "observation.state": {"mean": torch.ones(STATE_DIM), "std": 2 * torch.ones(STATE_DIM)},

@@ -27,14 +27,6 @@ def make_policy(features, **overrides) -> SARNNPolicy:
     )
 
 
-def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
-    g = torch.Generator().manual_seed(seed)
-    return {
-        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
-        FRONT: torch.rand(batch, *IMAGE, generator=g),
-    }
-
-
 def test_sarnn_is_our_policy_type_and_found_by_lerobots_convention():
     assert "sarnn" in registered_policy_types()
     assert PreTrainedConfig.get_choice_class("sarnn") is SARNNConfig
@@ -82,7 +74,7 @@ def test_shapes_and_a_training_step(features, windows):
     assert int(policy.train_steps) == 1
 
 
-def test_every_camera_gets_its_own_branch_depth_included(features, windows):
+def test_every_camera_gets_its_own_branch_depth_included(features, windows, observation):
     inputs, outputs = features
     depth = "observation.images.front_depth"
     inputs = {**inputs, depth: PolicyFeature(FeatureType.VISUAL, (1, 20, 24))}
@@ -132,7 +124,7 @@ def test_overfits_a_tiny_batch_of_sequences(features, windows):
     assert losses[-1][1] < 0.25 * losses[0][1], losses
 
 
-def test_rollout_is_stateful_holds_commands_and_resets(features):
+def test_rollout_is_stateful_holds_commands_and_resets(features, observation):
     policy = make_policy(features, frame_skip=3)
     policy.reset()
     obs = [observation(2, seed=i) for i in range(7)]
@@ -149,7 +141,7 @@ def test_rollout_is_stateful_holds_commands_and_resets(features):
     assert not torch.allclose(policy.predict_action_chunk(obs[0]), first)
 
 
-def test_save_load_round_trip_gives_identical_actions(features, tmp_path):
+def test_save_load_round_trip_gives_identical_actions(features, tmp_path, observation):
     policy = make_policy(features, image_size=(16, 16))
     stats = {
         "observation.state": {"mean": torch.ones(STATE_DIM), "std": 2 * torch.ones(STATE_DIM)},
