@@ -2,9 +2,12 @@
 
 The writer streams images to their final encoding as steps arrive (video encoders for the
 compact variant, per-frame HDF5 chunks for the single-file variant), so a long episode never
-sits in RAM. Everything is written to a hidden temporary sibling and renamed into place only
-when :meth:`EpisodeWriter.close` succeeds: an exception, Ctrl-C or a crash leaves no episode at
-the destination.
+sits in RAM. Everything is written to a hidden temporary sibling (:class:`~rmb_lerobot.staging.
+Staging`) and moved into place only when :meth:`EpisodeWriter.close` succeeds: an exception,
+Ctrl-C or a crash leaves no episode at the destination, and the temporary of a writer whose
+process died is recognised as stale by :func:`~rmb_lerobot.staging.remove_stale` (its lock is
+free). Temporaries of older versions of this writer carry no lock; see
+:func:`remove_legacy_temporaries`.
 """
 
 from __future__ import annotations
@@ -12,8 +15,10 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
+import shlex
 import shutil
-import uuid
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -27,6 +32,7 @@ from rmb_lerobot.codecs.video import RgbVideoWriter
 from rmb_lerobot.episode.layout import EpisodeFormat, episode_format, rgb_video_path
 from rmb_lerobot.errors import RmbFormatError
 from rmb_lerobot.pose import relative_pose_sequence
+from rmb_lerobot.staging import Staging
 
 logger = logging.getLogger(__name__)
 
@@ -101,18 +107,23 @@ class EpisodeWriter:
         self._rgb_options = {"crf": rgb_crf, "preset": rgb_preset}
         self.overwrite = overwrite
 
-        self._tmp = self.path.with_name(f".{self.path.name}.tmp-{uuid.uuid4().hex[:8]}")
         self._lowdim: dict[str, list[np.ndarray]] = {}
         self._shapes: dict[str, tuple[tuple[int, ...], np.dtype]] = {}
         self._encoders: dict[str, Any] = {}  # compact: image key -> video writer
         self._h5: h5py.File | None = None  # single file: open from the start for image chunks
         self._num_steps = 0
+        # The hidden temporary, locked for as long as this process records into it.
+        self._staging = Staging(self.path)
+        self._tmp = self._staging.path
+        try:
+            if self.format is EpisodeFormat.COMPACT:
+                self._tmp.mkdir()
+            else:
+                self._h5 = h5py.File(self._tmp, "w")
+        except BaseException:
+            self._staging.discard()
+            raise
         self._closed = False
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        if self.format is EpisodeFormat.COMPACT:
-            self._tmp.mkdir()
-        else:
-            self._h5 = h5py.File(self._tmp, "w")
 
     # ------------------------------------------------------------------ recording
     def __len__(self) -> int:
@@ -307,18 +318,12 @@ class EpisodeWriter:
         return self.path
 
     def _move_into_place(self) -> None:
-        if not self.path.exists():
-            os.replace(self._tmp, self.path)
-            return
-        if not self.overwrite:
+        if self.path.exists() and not self.overwrite:
             raise RmbFormatError(
                 "destination appeared while recording; not overwriting", path=self.path
             )
-        # Swap via a trash name so the destination is never missing a complete episode.
-        trash = self.path.with_name(f".{self.path.name}.old-{uuid.uuid4().hex[:8]}")
-        os.replace(self.path, trash)
-        os.replace(self._tmp, self.path)
-        _remove(trash)
+        # With overwrite, an atomic exchange: readers see the old episode or the new one.
+        self._staging.commit(overwrite=self.overwrite)
 
     def abort(self) -> None:
         """Discard everything written so far; nothing appears at ``path``."""
@@ -330,11 +335,18 @@ class EpisodeWriter:
             with contextlib.suppress(Exception):
                 self._h5.close()
             self._h5 = None
-        _remove(self._tmp)
+        self._staging.discard()
         self._closed = True
 
     def __enter__(self) -> EpisodeWriter:
         return self
+
+    def __del__(self) -> None:
+        # A writer dropped unclosed can never be committed: free its temporary and lock now
+        # rather than at process exit.
+        if not getattr(self, "_closed", True):
+            with contextlib.suppress(Exception):
+                self.abort()
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
@@ -343,8 +355,92 @@ class EpisodeWriter:
             self.abort()
 
 
+LEGACY_MAX_AGE_S = 24 * 3600
+"""Legacy temporaries untouched this long are removed; younger ones are only reported."""
+
+# What versions before the flock'ed staging left: ``.NAME.rmb.tmp-<8 hex>`` (the episode being
+# written) and ``.NAME.rmb.old-<8 hex>`` (the previous episode while being overwritten).
+_LEGACY = re.compile(r"\.(?P<name>.+\.(?:rmb|hdf5))\.(?P<kind>tmp|old)-[0-9a-f]{8}", re.IGNORECASE)
+
+
+def remove_legacy_temporaries(
+    directory: str | Path, max_age_s: float = LEGACY_MAX_AGE_S
+) -> tuple[list[Path], list[Path]]:
+    """Remove episode temporaries of older versions, which carry no lock; returns (removed, kept).
+
+    Without a lock nothing tells a dead writer's temporary from one a still-running older
+    version is writing, so age decides: such a writer modifies its temporary at every step and
+    an episode takes minutes, hence one untouched for ``max_age_s`` (a day) is dead unless its
+    process was stopped for that long. Younger ones are kept and reported with the command that
+    deletes them. A ``.old-`` sibling whose episode is missing holds the only copy of that
+    episode (the old writer died between two renames): it is never removed, and reported with
+    the command that restores it.
+    """
+    directory = Path(directory)
+    removed: list[Path] = []
+    kept: list[Path] = []
+    if not directory.is_dir():
+        return removed, kept
+    now = time.time()
+    orphans: list[tuple[Path, Path]] = []
+    for entry in sorted(directory.iterdir()):
+        match = _LEGACY.fullmatch(entry.name)
+        if match is None:
+            continue
+        dest = directory / match["name"]
+        if match["kind"] == "old" and not dest.exists():
+            orphans.append((entry, dest))
+        elif now - _newest_mtime(entry) >= max_age_s:
+            _remove(entry)
+            removed.append(entry)
+        else:
+            kept.append(entry)
+    if removed:
+        logger.warning(
+            "removed %d temporar%s of an older rmb_lerobot version, untouched for over %.0f h, "
+            "in %s: %s",
+            len(removed),
+            "y" if len(removed) == 1 else "ies",
+            max_age_s / 3600,
+            directory,
+            ", ".join(p.name for p in removed),
+        )
+    if kept:
+        logger.warning(
+            "%d temporar%s of an older rmb_lerobot version in %s (no lock says whether its "
+            "writer still runs; removed once untouched for %.0f h). If no older version is "
+            "writing there, delete now with: rm -rf -- %s",
+            len(kept),
+            "y" if len(kept) == 1 else "ies",
+            directory,
+            max_age_s / 3600,
+            " ".join(shlex.quote(str(p)) for p in kept),
+        )
+    for entry, dest in orphans:
+        logger.warning(
+            "%s holds the previous version of the missing episode %s (an older rmb_lerobot "
+            "stopped while overwriting it); restore it with: mv -n -- %s %s",
+            entry,
+            dest.name,
+            shlex.quote(str(entry)),
+            shlex.quote(str(dest)),
+        )
+    return removed, kept + [entry for entry, _ in orphans]
+
+
+def _newest_mtime(path: Path) -> float:
+    """Latest modification time in a file or directory tree (what a live writer keeps fresh)."""
+    newest = path.lstat().st_mtime
+    if path.is_dir() and not path.is_symlink():
+        for root, dirs, files in os.walk(path):
+            for name in dirs + files:
+                with contextlib.suppress(FileNotFoundError):
+                    newest = max(newest, os.lstat(os.path.join(root, name)).st_mtime)
+    return newest
+
+
 def _remove(path: Path) -> None:
-    if path.is_dir():
+    if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
     else:
         with contextlib.suppress(FileNotFoundError):
@@ -352,4 +448,10 @@ def _remove(path: Path) -> None:
 
 
 # Depth given as metres is rounded to millimetres by the video codecs; re-exported for users.
-__all__ = ["EpisodeWriter", "ForwardKinematics", "metres_to_mm"]
+__all__ = [
+    "LEGACY_MAX_AGE_S",
+    "EpisodeWriter",
+    "ForwardKinematics",
+    "metres_to_mm",
+    "remove_legacy_temporaries",
+]

@@ -1,13 +1,20 @@
 """EpisodeWriter: RMB's on-disk layout, derived keys, streaming, atomicity, bad input."""
 
+import logging
+import os
+import stat
+import time
+
 import h5py
 import numpy as np
 import pytest
 
 from rmb_lerobot import EpisodeWriter, RmbFormatError, open_episode
 from rmb_lerobot import keys as K
+from rmb_lerobot.episode.writer import remove_legacy_temporaries
 from rmb_lerobot.kinematics import UR5E
 from rmb_lerobot.pose import relative_pose
+from rmb_lerobot.staging import remove_stale
 
 
 def test_compact_episode_has_rmbs_file_layout(tmp_path, record):
@@ -104,6 +111,103 @@ def test_existing_destination_needs_overwrite(tmp_path, record, steps, attrs):
     with open_episode(path) as ep:
         assert len(ep) == 4 and ep.attrs["world_idx"] == 3
     assert [p.name for p in tmp_path.iterdir()] == ["demo.rmb"]
+
+
+@pytest.mark.parametrize("name", ["demo.rmb", "demo.hdf5"])
+def test_an_interrupted_overwrite_keeps_the_previous_episode(tmp_path, record, steps, attrs, name):
+    path = record(tmp_path / name)
+    with pytest.raises(KeyboardInterrupt), EpisodeWriter(path, attrs, overwrite=True) as writer:
+        writer.append(steps[0])
+        raise KeyboardInterrupt
+    with open_episode(path) as ep:
+        assert len(ep) == len(steps)
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+@pytest.mark.parametrize("name", ["demo.rmb", "demo.hdf5"])
+def test_the_temporary_is_locked_while_recording(tmp_path, steps, attrs, name):
+    # HDF5 locks the temporary file it writes; the staging lock is a separate file, so a
+    # clean-up (here in the same process; flock conflicts between open files all the same)
+    # sees a live writer and leaves its temporary alone.
+    writer = EpisodeWriter(tmp_path / name, attrs)
+    for step in steps[:3]:
+        writer.append(step)
+    hidden = sorted(p.name for p in tmp_path.iterdir())
+    assert len(hidden) == 2 and hidden[0].startswith(f".{name}.tmp-")
+    assert hidden[1] == hidden[0] + ".lock"
+    assert remove_stale(tmp_path) == []
+    writer.append(steps[3])
+    writer.close()
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_an_unclosed_writer_that_is_dropped_leaves_nothing(tmp_path, steps, attrs):
+    writer = EpisodeWriter(tmp_path / "demo.rmb", attrs)
+    writer.append(steps[0])
+    del writer
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["demo.rmb", "demo.hdf5"])
+@pytest.mark.parametrize("umask", [0o022, 0o002])
+def test_written_files_follow_the_umask(tmp_path, record, name, umask):
+    previous = os.umask(umask)
+    try:
+        path = record(tmp_path / name)
+    finally:
+        os.umask(previous)
+    entries = [path, *path.iterdir()] if path.is_dir() else [path]
+    assert any(e.suffix == ".mp4" for e in entries) or name.endswith(".hdf5")
+    for entry in entries:
+        expected = (0o777 if entry.is_dir() else 0o666) & ~umask
+        assert stat.S_IMODE(entry.stat().st_mode) == expected, entry.name
+
+
+def _age(path, hours):
+    old = time.time() - hours * 3600
+    for entry in [path, *path.rglob("*")]:
+        os.utime(entry, (old, old), follow_symlinks=False)
+
+
+def test_temporaries_of_older_versions_are_removed_after_a_day(tmp_path, record, caplog):
+    record(tmp_path / "kept.rmb")
+    dead = tmp_path / ".a.rmb.tmp-0123abcd"  # older versions: 8 hex digits, no lock
+    dead.mkdir()
+    (dead / "front_rgb_image.rmb.mp4").write_bytes(b"x")
+    _age(dead, 25)
+    young = tmp_path / ".b.hdf5.tmp-89abcdef"  # perhaps an older version still recording
+    young.write_bytes(b"x")
+    _age(young, 2)
+    trash = tmp_path / ".kept.rmb.old-00ff00ff"  # an overwritten episode, its successor in place
+    trash.mkdir()
+    _age(trash, 30)
+    orphan = tmp_path / ".c.rmb.old-11ff11ff"  # the only copy of c.rmb: never removed
+    orphan.mkdir()
+    _age(orphan, 30)
+    other = tmp_path / ".notes.txt.tmp-0123abcd"  # not an episode temporary
+    other.write_text("x")
+    _age(other, 30)
+
+    with caplog.at_level(logging.WARNING):
+        removed, kept = remove_legacy_temporaries(tmp_path)
+    assert removed == [dead, trash]
+    assert kept == [young, orphan]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [young.name, orphan.name, other.name, "kept.rmb"]
+    )
+    assert f"delete now with: rm -rf -- {young}" in caplog.text
+    assert f"restore it with: mv -n -- {orphan} {tmp_path / 'c.rmb'}" in caplog.text
+
+
+def test_legacy_clean_up_leaves_current_temporaries_to_their_locks(tmp_path, steps, attrs):
+    writer = EpisodeWriter(tmp_path / "demo.rmb", attrs)
+    writer.append(steps[0])
+    _age(writer._tmp, 48)
+    assert remove_legacy_temporaries(tmp_path) == ([], [])
+    writer.append(steps[1])
+    writer.close()
+    with open_episode(tmp_path / "demo.rmb") as ep:
+        assert len(ep) == 2
 
 
 @pytest.mark.parametrize(
