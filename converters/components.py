@@ -1,7 +1,7 @@
 """Per-dimension names of RMB keys, for the ``names`` of LeRobot features.
 
 LeRobot stores one name per number of a vector feature; tools (the dataset viewer, GR00T's
-``modality.json``, :mod:`.from_lerobot`) read them. Names say what each number is in RMB's
+``modality.json``, :mod:`.lerobot_to_rmb`) read them. Names say what each number is in RMB's
 conventions, e.g. ``measured_joint_pos`` of a UR5e -> ``joint_0 ... joint_5, gripper``.
 """
 

@@ -34,6 +34,7 @@ from lerobot.datasets.lerobot_dataset import LeRobotDataset
 from lerobot.datasets.video_utils import StreamingVideoEncoder
 from rmb_lerobot.converters.copy import remux
 from rmb_lerobot.converters.rate import exact_rate
+from rmb_lerobot.converters.stats import finite_episode_stats
 
 # Seconds between checks that an encoder thread is still alive while waiting for queue space.
 _POLL_S = 1.0
@@ -134,13 +135,17 @@ class ConversionDataset(LeRobotDataset):
     """A ``LeRobotDataset`` whose streaming encoder is :class:`ConversionEncoder`.
 
     Only writing differs; the files are plain LeRobotDataset v3, read with ``LeRobotDataset``.
-    ``save_episode`` also embeds image bytes in batches: LeRobot 0.6.1 maps over the episode
-    row by row (``datasets.map(batched=False)``), ~10 ms per frame with RMB's ~25 features
+    ``save_episode`` computes statistics that tolerate NaN/inf (:mod:`.stats`, only reachable
+    with ``--allow-non-finite``) and embeds image bytes in batches: LeRobot 0.6.1 maps over the
+    episode row by row (``datasets.map(batched=False)``), ~10 ms per frame with RMB's ~25 features
     even when no feature holds images, which made it the largest cost after video encoding.
     """
 
     def save_episode(self, episode_data: dict | None = None, parallel_encoding: bool = True):
-        with mock.patch.object(dataset_writer, "embed_images", _embed_images_batched):
+        with (
+            mock.patch.object(dataset_writer, "embed_images", _embed_images_batched),
+            mock.patch.object(dataset_writer, "compute_episode_stats", finite_episode_stats),
+        ):
             super().save_episode(episode_data, parallel_encoding)
 
     @staticmethod

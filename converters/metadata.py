@@ -5,7 +5,7 @@ warning), so RMB's episode attributes live in their own file next to it, uploade
 dataset: per episode the source file and every HDF5 attribute (env, world_idx, demo_name,
 task_desc, camera_names, ``<camera>_depth_image_fovy``, ...), plus the dataset-wide key mapping
 (which RMB keys make up ``observation.state`` and ``action``, which feature holds which RMB key),
-the robot layout and the true frame rate. :mod:`.from_lerobot` reads it back.
+the robot layout and the true frame rate. :mod:`.lerobot_to_rmb` reads it back.
 """
 
 from __future__ import annotations

@@ -2,8 +2,12 @@
 
 Opening an episode reads only its HDF5 header and video indexes, so every episode is checked
 up front: the keys named in ``--state-keys``/``--action-keys``/``--camera-names`` exist, all
-episodes come from one env at one frame rate, and their keys and image sizes agree. Each error
-names the file and the key.
+episodes come from one env at one regular frame rate (:func:`.rate.control_rate`), their keys
+and image sizes agree and their attributes are valid (:mod:`.attrs`). Each error names the file
+and the key.
+
+Every episode is opened with :func:`open_source`, which passes ``allow_non_finite`` on to the
+reader: by default an episode with NaN/inf in a low-dimensional key is refused.
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from rmb_lerobot.converters.rate import measured_rate, nominal_rate, same_rate
+from rmb_lerobot.converters.attrs import checked_attrs
+from rmb_lerobot.converters.rate import control_rate, nominal_rate, same_rate
 from rmb_lerobot.converters.schema import DatasetSchema, build_schema
 from rmb_lerobot.envs.registry import ROBOTS
 
@@ -35,8 +40,9 @@ class ConvertOptions:
     camera_names: tuple[str, ...] | None = None  # None: every camera of the first episode
     depth: bool = False
     task: str | None = None  # None: each episode's task_desc
-    fps: str | float | None = None  # None: from the `time` key
+    fps: str | float | None = None  # None: from the `time` key (else `time` problems only warn)
     skip: int = 1
+    allow_non_finite: bool = False  # keep NaN/inf in low-dim keys (stats ignore them)
 
     def __post_init__(self) -> None:
         if self.skip < 1:
@@ -64,6 +70,7 @@ class ConversionPlan:
     skip: int
     env: str
     robot_type: str
+    allow_non_finite: bool = False
 
     @property
     def rate(self) -> Fraction:
@@ -73,6 +80,17 @@ class ConversionPlan:
     @property
     def total_frames(self) -> int:
         return sum(ep.length for ep in self.episodes)
+
+
+def open_source(path: str | Path, allow_non_finite: bool = False) -> Episode:
+    """Open a source episode the way every step of a conversion must (plan, writers, workers).
+
+    The reader refuses NaN/inf in low-dimensional keys unless ``allow_non_finite``; the
+    converter checks again where values enter the dataset (:mod:`.cast`).
+    """
+    if allow_non_finite:
+        return open_episode(path, allow_non_finite=True)
+    return open_episode(path)  # the reader's default: refuse
 
 
 def robot_type_of(env: str) -> str:
@@ -127,18 +145,22 @@ class _Checker:
                     path=first.path,
                     key=K.rgb_image_key(camera),
                 )
-        self.rate = self._rate(first)
+        self.rate = self._rate(first, options)
         self.lowdim = _lowdim_shapes(first)
         self.images = _image_shapes(first, self.cameras, options.depth)
 
     @staticmethod
-    def _rate(episode: Episode) -> float | None:
+    def _rate(episode: Episode, options: ConvertOptions) -> float | None:
+        """The episode's control rate; with ``--fps`` given, a bad ``time`` only warns."""
         if K.TIME not in episode:
             return None
         try:
-            return measured_rate(episode[K.TIME][:])
-        except ValueError as exc:
-            raise RmbFormatError(str(exc), path=episode.path, key=K.TIME) from exc
+            return control_rate(episode[K.TIME][:], path=episode.path)
+        except RmbFormatError as exc:
+            if options.fps is None:
+                raise
+            logger.warning("%s; using --fps %s", exc, options.fps)
+            return None
 
     def check(self, episode: Episode) -> float | None:
         """Raise on any mismatch with the first episode; returns the measured rate."""
@@ -153,8 +175,18 @@ class _Checker:
                 path=episode.path,
                 key=K.ATTR_ENV,
             )
-        rate = self._rate(episode)
-        if (rate is None) != (self.rate is None) or (rate and not same_rate(rate, self.rate)):
+        first = episode.path == self.first_path
+        rate = self.rate if first else self._rate(episode, self.options)
+        if self.options.fps is not None:
+            asserted = float(nominal_rate(str(self.options.fps)))
+            if rate is not None and not same_rate(rate, asserted):
+                logger.warning(
+                    "%s: 'time' gives %s but --fps says %g Hz; using --fps",
+                    episode.path,
+                    _hz(rate),
+                    asserted,
+                )
+        elif (rate is None) != (self.rate is None) or (rate and not same_rate(rate, self.rate)):
             raise RmbFormatError(
                 f"mixed frame rates in one conversion: {str(self.first_path)!r} runs at "
                 f"{_hz(self.rate)}, this episode at {_hz(rate)} (from its 'time' key)",
@@ -201,13 +233,14 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
     sources: list[EpisodeSource] = []
     checker: _Checker | None = None
     for path in paths:
-        with open_episode(path) as episode:
+        with open_source(path, options.allow_non_finite) as episode:
+            attrs = checked_attrs(episode.attrs, episode.format.hdf5_path(episode.path))
             if checker is None:
                 checker = _Checker(episode, options)
             rate = checker.check(episode)
-            task = options.task or str(episode.attrs.get(K.ATTR_TASK_DESC) or checker.env)
+            task = options.task or str(attrs.get(K.ATTR_TASK_DESC) or checker.env)
             length = -(-len(episode) // options.skip)
-            sources.append(EpisodeSource(Path(path), length, task, dict(episode.attrs), rate))
+            sources.append(EpisodeSource(Path(path), length, task, attrs, rate))
     assert checker is not None
     if options.fps is not None:
         source_rate = nominal_rate(str(options.fps))
@@ -232,4 +265,5 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         skip=options.skip,
         env=checker.env,
         robot_type=robot_type_of(checker.env),
+        allow_non_finite=options.allow_non_finite,
     )

@@ -14,8 +14,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+from rmb_lerobot.converters.cast import to_float32
 from rmb_lerobot.converters.components import component_names, infer_layout, stored_dim
 from rmb_lerobot.converters.skip import skip_sequence
 
@@ -108,16 +110,33 @@ class DatasetSchema:
             }
         return features
 
-    def episode_arrays(self, lowdim: Mapping[str, np.ndarray], skip: int) -> dict[str, np.ndarray]:
-        """Per-frame float32 arrays ``(T', d)`` of every low-dimensional feature, subsampled."""
+    def episode_arrays(
+        self,
+        lowdim: Mapping[str, np.ndarray],
+        skip: int,
+        *,
+        path: str | Path | None = None,
+        allow_non_finite: bool = False,
+    ) -> dict[str, np.ndarray]:
+        """Per-frame float32 arrays ``(T', d)`` of every low-dimensional feature, subsampled.
+
+        Each key is cast with :func:`.cast.to_float32` (errors name ``path``, key and step).
+        """
         skipped = {key: skip_sequence(key, lowdim[key], skip) for key in self.lowdim_keys}
+
+        def cast(key: str, values: np.ndarray) -> np.ndarray:
+            flat = values.reshape(len(values), -1)
+            return to_float32(flat, key, path=path, skip=skip, allow_non_finite=allow_non_finite)
+
         arrays = {}
         for feature, keys in ((N.STATE, self.state_keys), (N.ACTION_KEY, self.action_keys)):
-            parts = [policy_view(key, skipped[key]) for key in keys]
-            arrays[feature] = np.concatenate(parts, axis=1).astype(np.float32)
+            for key in keys:
+                if uses_policy_view(key):
+                    cast(key, skipped[key])  # errors name the recorded component, not the view's
+            parts = [cast(key, policy_view(key, skipped[key])) for key in keys]
+            arrays[feature] = np.concatenate(parts, axis=1)
         for key in self.extra_keys:
-            values = skipped[key]
-            arrays[N.rmb_feature_key(key)] = values.reshape(len(values), -1).astype(np.float32)
+            arrays[N.rmb_feature_key(key)] = cast(key, skipped[key])
         return arrays
 
 

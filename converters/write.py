@@ -1,13 +1,20 @@
 """Stream RMB episodes into a LeRobotDataset through LeRobot's own writer.
 
-Per episode: the low-dimensional keys are read at once (small), images are decoded in chunks
-straight from the episode's videos (sequential decoding, no seeking) and handed to
-``add_frame``; LeRobot's streaming encoder threads encode them while the next chunk decodes.
+Per episode: the low-dimensional keys are read at once (small) and cast to float32 with checks
+(:mod:`.cast`), images are decoded in chunks straight from the episode's videos (sequential
+decoding, no seeking) and handed to ``add_frame``; LeRobot's streaming encoder threads encode
+them while the next chunk decodes.
+
+Depth is clamped to the range LeRobot's depth encoder stores (0.01..10 m by default; NaN and
+"no data" zeros become the near end, +inf the far end) before it reaches the encoder, whose
+statistics would otherwise describe values the videos cannot hold. After the last episode,
+:func:`finish_metadata` corrects what LeRobot's writer gets wrong for non-integer rates.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -16,17 +23,19 @@ from pathlib import Path
 import av
 import numpy as np
 from lerobot.configs import DepthEncoderConfig, RGBEncoderConfig, depth_encoder_defaults
+from lerobot.datasets.io_utils import load_info, write_info
 from rmb_lerobot.converters.copy import COPY, COPYABLE_CODEC
 from rmb_lerobot.converters.encoder import ConversionDataset
-from rmb_lerobot.converters.plan import ConversionPlan, EpisodeSource
+from rmb_lerobot.converters.plan import ConversionPlan, EpisodeSource, open_source
 from rmb_lerobot.converters.progress import Progress
 from rmb_lerobot.converters.rate import lerobot_fps
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
-from rmb_lerobot.episode import open_episode
 from rmb_lerobot.episode.layout import rgb_video_path
 from rmb_lerobot.errors import RmbFormatError
+
+logger = logging.getLogger(__name__)
 
 # Dataset frames decoded per read: bounds memory (32 x 640x480x3 = 29 MB per camera).
 CHUNK = 32
@@ -41,6 +50,38 @@ def quiet_depth_encoder() -> DepthEncoderConfig:
     if params is not None and config.vcodec == "hevc":
         config.extra_options = {**config.extra_options, _X265_PARAMS: f"{params}:log-level=error"}
     return config
+
+
+def depth_range() -> tuple[float, float]:
+    """Metres LeRobot's depth videos can hold: the encoder's quantisation range."""
+    config = quiet_depth_encoder()
+    return float(config.depth_min), float(config.depth_max)
+
+
+def clamp_depth(depth: np.ndarray) -> tuple[np.ndarray, int]:
+    """Depth metres as the dataset stores them (see the module docstring), and how many
+    values were NaN/inf or beyond the far end (zeros and negatives are "no data" as usual)."""
+    low, high = depth_range()
+    depth = np.array(depth, dtype=np.float32)
+    repaired = int(np.count_nonzero(~np.isfinite(depth) | (depth > high)))
+    depth = np.nan_to_num(depth, copy=False, nan=0.0, posinf=high, neginf=0.0)
+    return np.clip(depth, low, high, out=depth), repaired
+
+
+def _report_depth(source: EpisodeSource, repaired: dict[str, int]) -> None:
+    low, high = depth_range()
+    for feature, count in repaired.items():
+        if count:
+            logger.warning(
+                "%s: %d depth values of %r are NaN/inf or beyond %g m (LeRobot's depth range): "
+                "stored as %g m (far) or, for NaN, %g m (no data)",
+                source.path,
+                count,
+                feature,
+                high,
+                high,
+                low,
+            )
 
 
 @dataclass(frozen=True)
@@ -94,15 +135,21 @@ def add_episode(
                 for camera in schema.cameras
             }
         )
+    repaired = {N.depth_image_key(c): 0 for c in schema.depth_cameras}
     try:
-        with open_episode(source.path) as episode:
+        with open_source(source.path, plan.allow_non_finite) as episode:
             lowdim = {key: np.asarray(episode[key][:]) for key in schema.lowdim_keys}
-            arrays = schema.episode_arrays(lowdim, skip)
+            arrays = schema.episode_arrays(
+                lowdim, skip, path=source.path, allow_non_finite=plan.allow_non_finite
+            )
             videos = {feature: episode[key] for feature, key in schema.image_keys().items()}
             steps = len(episode)
             for start in range(0, steps, CHUNK * skip):
                 stop = min(steps, start + CHUNK * skip)
                 images = {f: series[start:stop:skip] for f, series in videos.items()}
+                for feature in repaired:
+                    images[feature], count = clamp_depth(images[feature])
+                    repaired[feature] += count
                 first = start // skip
                 for j in range(-(-(stop - start) // skip)):
                     frame = {feature: values[first + j] for feature, values in arrays.items()}
@@ -113,6 +160,7 @@ def add_episode(
                     dataset.add_frame(frame)
                 progress.frames(-(-(stop - start) // skip))
             dataset.save_episode()
+        _report_depth(source, repaired)
     except RmbFormatError:
         raise
     except (av.FFmpegError, ValueError, KeyError, IndexError) as exc:  # unreadable or bad data
@@ -144,3 +192,17 @@ def write_dataset(
         raise
     dataset.finalize()
     return root
+
+
+def finish_metadata(root: Path, plan: ConversionPlan) -> None:
+    """Fix ``info.json`` of a finished dataset: each video's true frame rate.
+
+    LeRobot records ``video.fps`` as ``int(stream.base_rate)``: 31 for RMB's 125/4 streams,
+    while the dataset's ``fps`` and the streams themselves run at 31.25.
+    """
+    info = load_info(root)
+    fps = lerobot_fps(plan.rate)
+    for feature in info.features.values():
+        if feature.get("dtype") == "video" and feature.get("info"):
+            feature["info"]["video.fps"] = fps
+    write_info(info, root)

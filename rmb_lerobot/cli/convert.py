@@ -41,6 +41,15 @@ def _add_switch(sub) -> None:
     )
 
 
+def _add_allow_non_finite(parser) -> None:
+    parser.add_argument(
+        "--allow-non-finite",
+        action="store_true",
+        help="keep NaN/inf in low-dimensional data instead of refusing the episode (statistics "
+        "then describe the finite values only)",
+    )
+
+
 def _add_to_lerobot(sub) -> None:
     to = sub.add_parser(
         "to-lerobot",
@@ -80,7 +89,10 @@ def _add_to_lerobot(sub) -> None:
     )
     to.add_argument("--task", help="task text for every episode (default: its task_desc)")
     to.add_argument(
-        "--fps", help="frame rate of the episodes, e.g. 31.25 or 125/4 (default: from 'time')"
+        "--fps",
+        help="frame rate of the episodes, e.g. 31.25 or 125/4 (default: from 'time', which must "
+        "then be evenly spaced seconds at 1..1000 Hz; with --fps, problems with 'time' are "
+        "warnings)",
     )
     to.add_argument("--skip", type=int, default=1, help="keep every K-th step, like RMB's --skip")
     to.add_argument(
@@ -91,6 +103,7 @@ def _add_to_lerobot(sub) -> None:
         "always uses LeRobot's depth encoder",
     )
     to.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    _add_allow_non_finite(to)
     to.add_argument("--overwrite", action="store_true", help="replace an existing dataset")
     to.add_argument("--push-to-hub", action="store_true", help="upload with LeRobot's push_to_hub")
     to.add_argument("--private", action="store_true", help="create the Hub repository private")
@@ -136,6 +149,7 @@ def _add_from_lerobot(sub) -> None:
         help="RMB key for another feature, e.g. observation.effort=measured_joint_torque",
     )
     back.add_argument("--overwrite", action="store_true", help="replace an existing --output")
+    _add_allow_non_finite(back)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -183,6 +197,7 @@ def _to_lerobot(args) -> None:
         task=args.task,
         fps=args.fps,
         skip=args.skip,
+        allow_non_finite=args.allow_non_finite,
     )
     repo_id, root = to_lerobot(
         args.src,
@@ -217,19 +232,27 @@ def _from_lerobot(args) -> None:
         episodes=args.episodes,
         overrides=overrides,
         overwrite=args.overwrite,
+        allow_non_finite=args.allow_non_finite,
     )
     print(f"wrote {len(written)} episodes to {args.output}")
 
 
-def _exit_on_sigterm(signum, frame) -> None:
-    # SystemExit unwinds like Ctrl-C: staged outputs are removed, nothing is left half-written.
-    sys.exit(128 + signum)
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, unwinding like Ctrl-C: staged outputs are removed, nothing is half-written."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated(signum)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         if args.command == "switch-format":
             out = switch_format(
@@ -243,9 +266,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (RmbFormatError, FileExistsError, ValueError) as exc:
         print(f"rmb-convert: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("rmb-convert: interrupted; nothing was written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", signal.SIGINT)
+        name = signal.Signals(signum).name
+        kept = " (an existing destination is unchanged)" if getattr(args, "overwrite", 0) else ""
+        print(f"rmb-convert: interrupted ({name}); nothing was written{kept}", file=sys.stderr)
+        return 128 + signum
     finally:
         signal.signal(signal.SIGTERM, previous)
     return 0

@@ -4,7 +4,10 @@ Works on datasets written by ``rmb-convert to-lerobot`` (restoring every key and
 ``meta/rmb.json``) and on any other LeRobot dataset, e.g. one recorded with ``lerobot-record``,
 through the documented mapping of :mod:`.lerobot_mapping`. Episodes are written with
 :class:`~rmb_lerobot.episode.EpisodeWriter` (missing ``_rel`` keys are derived as the original
-recorder does) into an output directory that appears only when every episode is written.
+recorder does) into an output directory that appears only when every episode is written
+(:mod:`.atomic`: built in a locked hidden sibling, what interrupted runs left there is removed
+first). Non-finite numbers in the dataset are refused unless ``allow_non_finite``, as in
+``to-lerobot``.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ from typing import Any
 
 import numpy as np
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters.atomic import check_destination, staged_directory
+from rmb_lerobot.converters.atomic import prepare_destination, staged_output
+from rmb_lerobot.converters.attrs import checked_attrs
 from rmb_lerobot.converters.lerobot_frames import CHUNK, image_column_frames, iter_video_frames
 from rmb_lerobot.converters.lerobot_mapping import (
     KeyDims,
@@ -78,6 +82,27 @@ def _split_vector(
     return out
 
 
+def _check_finite(
+    rows: Mapping[str, np.ndarray], features: Sequence[str], index: int, root: Path
+) -> None:
+    """Refuse NaN/inf in the numeric features of one episode (rows of the dataset)."""
+    for feature in features:
+        values = np.asarray(rows[feature])
+        if values.dtype.kind not in "fc":
+            continue
+        bad = ~np.isfinite(values.reshape(len(values), -1))
+        if bad.any():
+            frame, component = (int(i) for i in np.argwhere(bad)[0])
+            value = values.reshape(len(values), -1)[frame, component]
+            raise RmbFormatError(
+                f"{value} in episode {index}, frame {frame}, component {component} "
+                f"({int(bad.sum())} non-finite values in this episode); expected finite numbers "
+                "(pass --allow-non-finite to keep NaN/inf)",
+                path=root,
+                key=feature,
+            )
+
+
 def _lowdim(
     rows: Mapping[str, np.ndarray], mapping: KeyMapping, root: Path
 ) -> dict[str, np.ndarray]:
@@ -116,7 +141,8 @@ class _EpisodeAttrs:
     def __call__(self, index: int) -> dict[str, Any]:
         stored = self._stored.get(index)
         if stored is not None:
-            return {k: v for k, v in stored["attrs"].items() if k != K.ATTR_FORMAT}
+            attrs = checked_attrs(stored["attrs"], self._dataset.root / N.RMB_METADATA_PATH)
+            return {k: v for k, v in attrs.items() if k != K.ATTR_FORMAT}
         tasks = self._dataset.meta.episodes[index]["tasks"]
         return {
             K.ATTR_DEMO_NAME: f"episode_{index:06d}",
@@ -145,7 +171,11 @@ def _write_episode(
     attrs: dict[str, Any],
     path: Path,
     bars: Bars,
+    allow_non_finite: bool,
 ) -> None:
+    if not allow_non_finite:
+        numeric = [*mapping.features, N.STATE, N.ACTION_KEY, _TIMESTAMP]
+        _check_finite(rows, [f for f in numeric if f in rows], index, dataset.root)
     lowdim = _lowdim(rows, mapping, dataset.root)
     length = len(rows[_TIMESTAMP])
     streams = {
@@ -172,10 +202,14 @@ def from_lerobot(
     overrides: MappingOverrides | None = None,
     overwrite: bool = False,
     progress: bool = True,
+    allow_non_finite: bool = False,
 ) -> list[Path]:
-    """Write episodes of a LeRobotDataset as RMB episodes under ``output``; returns their paths."""
-    output = Path(output)
-    check_destination(output, overwrite)
+    """Write episodes of a LeRobotDataset as RMB episodes under ``output``; returns their paths.
+
+    NaN/inf in the dataset's numeric features fail the conversion (naming the feature, episode
+    and frame) unless ``allow_non_finite``.
+    """
+    output = prepare_destination(Path(output).expanduser().absolute(), overwrite)
     suffix = "." + EpisodeFormat.from_name(fmt).short_name
     dataset = open_dataset(repo_id, root)
     meta = dataset.meta
@@ -195,10 +229,11 @@ def from_lerobot(
     written, names = [], set()
     lengths = [meta.episodes[i]["length"] for i in selected]
     with (
-        staged_directory(output, overwrite) as tmp,
+        staged_output(output, overwrite) as staging,
         Bars(len(selected), sum(lengths), enabled=progress) as bars,
     ):
-        tmp.mkdir(parents=True)
+        tmp = staging.path
+        tmp.mkdir()
         for index in selected:
             rows_at = np.flatnonzero(episode_column == index)
             rows = table[int(rows_at[0]) : int(rows_at[-1]) + 1]
@@ -206,6 +241,7 @@ def from_lerobot(
             name = _safe_name(str(attrs.get(K.ATTR_DEMO_NAME) or f"episode_{index:06d}"))
             name = name if name not in names else f"{name}_{index:06d}"
             names.add(name)
-            _write_episode(dataset, index, rows, mapping, attrs, tmp / f"{name}{suffix}", bars)
+            path = tmp / f"{name}{suffix}"
+            _write_episode(dataset, index, rows, mapping, attrs, path, bars, allow_non_finite)
             written.append(output / f"{name}{suffix}")
     return written

@@ -3,7 +3,8 @@
 Everything is checked before anything is written (:mod:`.plan`), the dataset is built in a
 hidden sibling of the destination and moved into place only when complete (:mod:`.atomic`), and
 written with LeRobot's own writer (:mod:`.write`, :mod:`.shards`), plus ``meta/rmb.json``
-(:mod:`.metadata`) and GR00T's ``meta/modality.json`` (:mod:`.gr00t`).
+(:mod:`.metadata`) and GR00T's ``meta/modality.json`` (:mod:`.gr00t`). What an interrupted run
+left beside the destination is removed first.
 """
 
 from __future__ import annotations
@@ -13,14 +14,15 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from lerobot.utils.constants import HF_LEROBOT_HOME
-from rmb_lerobot.converters.atomic import check_destination, staged_directory
+from rmb_lerobot.converters.atomic import prepare_destination, staged_output
 from rmb_lerobot.converters.copy import COPY, check_copyable
 from rmb_lerobot.converters.gr00t import write_modality
 from rmb_lerobot.converters.metadata import write_rmb_metadata
 from rmb_lerobot.converters.plan import ConvertOptions, plan_conversion
 from rmb_lerobot.converters.progress import Bars
 from rmb_lerobot.converters.shards import write_sharded
-from rmb_lerobot.converters.write import VideoSettings, write_dataset
+from rmb_lerobot.converters.stats import refresh_finite_stats
+from rmb_lerobot.converters.write import VideoSettings, finish_metadata, write_dataset
 
 from rmb_lerobot.episode import find_episodes
 
@@ -54,10 +56,12 @@ def to_lerobot(
 
     ``video_codec`` is LeRobot's RGB ``vcodec`` (default: LeRobot's, AV1), or ``"copy"`` to
     keep the episodes' H.264 packets (:mod:`.copy`); depth always uses LeRobot's depth encoder.
+    ``options.allow_non_finite`` keeps NaN/inf of low-dimensional keys (statistics then
+    describe the finite values, :mod:`.stats`); by default such an episode is refused.
     """
     options = options or ConvertOptions()
     repo_id, root = resolve_destination(repo_id, output)
-    check_destination(root, overwrite)
+    prepare_destination(root, overwrite)
     VideoSettings(video_codec).rgb_encoder()  # LeRobot's check of the codec name, before any work
     plan = plan_conversion(find_episodes(*sources), options)
     video = VideoSettings(video_codec, check_copyable(plan) if video_codec == COPY else None)
@@ -70,13 +74,17 @@ def to_lerobot(
         root,
     )
     with (
-        staged_directory(root, overwrite) as tmp,
+        staged_output(root, overwrite) as staging,
         Bars(len(plan.episodes), plan.total_frames, enabled=progress) as bars,
     ):
+        tmp = staging.path
         if workers > 1 and len(plan.episodes) > 1:
-            write_sharded(tmp, repo_id, plan, video, workers, bars)
+            write_sharded(tmp, repo_id, plan, video, workers, bars, staging.sibling(".shards"))
         else:
             write_dataset(tmp, repo_id, plan, plan.episodes, video, bars)
+        finish_metadata(tmp, plan)
+        if plan.allow_non_finite:
+            refresh_finite_stats(tmp)
         write_rmb_metadata(tmp, plan)
         write_modality(tmp, plan.schema)
     return repo_id, root
