@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python benchmarks/loader.py [--episodes 3] [--steps 100] [--size 640 480]
-        [--samples 300] [--workdir DIR]
+        [--samples 300] [--workdir DIR] [--video-backends pyav [torchcodec]]
 
 Data: synthetic UR5e episodes (:mod:`rmb_lerobot.synthetic`) written as compact ``.rmb``
 (H.264 RGB with our writer's GOP 10, lossless ``rmb-videoio`` depth with GOP 30), converted with
@@ -17,9 +17,11 @@ t .. t+15 (indices clamped at episode ends, as LeRobot pads). Samples are drawn 
 random (fixed seed) in one process, as ``DataLoader(num_workers=0)`` would; rates scale with
 workers on both sides.
 
-- ``LeRobotDataset``: ``LeRobotDataset(..., delta_timestamps=...)[i]`` (LeRobot's pyav decoder:
-  one seek per video and sample), for the default conversion (AV1 RGB, GOP 2) and for
-  ``--video-codec copy`` (the episodes' H.264, GOP 10); depth is LeRobot's HEVC in both.
+- ``LeRobotDataset``: ``LeRobotDataset(..., delta_timestamps=..., video_backend=...)[i]``, for the
+  default conversion (AV1 RGB, GOP 2) and for ``--video-codec copy`` (the episodes' H.264, GOP 10);
+  depth is LeRobot's HEVC in both. ``pyav`` (our environment's decoder) reopens and seeks each
+  video per sample; ``torchcodec`` keeps one decoder per file open, but loads only where FFmpeg
+  4-8 shared libraries are on the loader path (not from our PyPI-only install, see RESULTS.md).
 - ``open_episode``: one open :class:`~rmb_lerobot.episode.Episode` per file, its series kept
   (readers stay open between samples); frames read by index lists, low-dimensional keys read
   from HDF5 per sample.
@@ -68,12 +70,14 @@ def make_data(work: Path, episodes: int, steps: int, size: tuple[int, int]) -> d
     return paths
 
 
-def lerobot_loader(root: Path):
+def lerobot_loader(root: Path, video_backend: str):
     fps = UR5E_CONTROL_HZ
     obs = [i / fps for i in OBS_STEPS]
     delta = {key: obs for key in (N.STATE, N.image_key("front"), N.image_key("hand"))}
     delta[N.ACTION_KEY] = [i / fps for i in ACTION_STEPS]
-    dataset = LeRobotDataset(f"local/{root.name}", root=root, delta_timestamps=delta)
+    dataset = LeRobotDataset(
+        f"local/{root.name}", root=root, delta_timestamps=delta, video_backend=video_backend
+    )
     depth = N.depth_image_key(DEPTH_CAMERA)
     keys = [N.STATE, N.ACTION_KEY, N.image_key("front"), N.image_key("hand"), depth]
 
@@ -138,7 +142,18 @@ def main() -> None:
     parser.add_argument("--size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
     parser.add_argument("--samples", type=int, default=300)
     parser.add_argument("--workdir", type=Path, help="keep the data here (default: a temp dir)")
+    parser.add_argument(
+        "--video-backends",
+        nargs="+",
+        choices=("pyav", "torchcodec"),
+        default=["pyav"],
+        help="LeRobot decoders to measure (torchcodec needs FFmpeg 4-8 shared libraries)",
+    )
     args = parser.parse_args()
+    if "torchcodec" in args.video_backends:
+        import torchcodec  # fails here, with torchcodec's own reason, rather than mid-benchmark
+
+        print(f"torchcodec {torchcodec.__version__} on FFmpeg {torchcodec.ffmpeg_major_version}")
 
     import av
     import datasets
@@ -151,12 +166,12 @@ def main() -> None:
     paths = find_episodes(data["episodes"])
 
     rows = []
-    for codec, name in (
-        (None, "LeRobotDataset (AV1, GOP 2)"),
-        (COPY, "LeRobotDataset (copy: H.264, GOP 10)"),
-    ):
-        sample, count = lerobot_loader(data[codec])
-        rows.append((name, 0.0, *run(sample, count, args.samples)))
+    for backend in args.video_backends:
+        for codec, name in ((None, "AV1, GOP 2"), (COPY, "copy: H.264, GOP 10")):
+            sample, count = lerobot_loader(data[codec], backend)
+            rows.append(
+                (f"LeRobotDataset ({name}), {backend}", 0.0, *run(sample, count, args.samples))
+            )
     for cache in (False, True):
         setup = time.perf_counter()
         loader = EpisodeLoader(paths, cache=cache)
