@@ -44,7 +44,10 @@ from rmb_lerobot.codecs.rmbz_h264 import PIX_FMT, PairDecoder, encode_pair
 from rmb_lerobot.errors import RmbFormatError
 
 CODEC_ID = "rmbz"
-FORMAT_VERSION = 1
+# 2: the footer's checksum covers the header too (a flipped digit of step_mm would otherwise
+# rescale every depth silently). Version 1 files are still read.
+FORMAT_VERSION = 2
+READABLE_VERSIONS = (1, 2)
 # A new group starts if a fresh reference makes the frame at most 60 % as big and the saving
 # pays for the new IDR within CHECK_INTERVAL frames.
 REFRESH_GAIN = 0.6
@@ -196,13 +199,20 @@ class RmbzReader(DepthReader):
     def _check_header(self, header: dict) -> None:
         if header.get("codec") != CODEC_ID:
             raise self._fail(f"codec is {header.get('codec')!r}, not {CODEC_ID!r}")
-        if header.get("format_version") != FORMAT_VERSION:
-            raise self._fail(f"unsupported format_version {header.get('format_version')!r}")
+        version = header.get("format_version")
+        if version not in READABLE_VERSIONS:
+            raise self._fail(
+                f"unsupported format_version {version!r} (this reader knows {READABLE_VERSIONS})"
+            )
+        if version >= 2 and not self._container.header_checked:
+            raise self._fail("header checksum mismatch")
         try:
             self.step = int(header["step_mm"])
             self._shape = (int(header["height"]), int(header["width"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise self._fail(f"header lacks step_mm/height/width ({exc})") from exc
+        if self.step < 1 or min(self._shape) < 1:
+            raise self._fail(f"header has step_mm {self.step} and shape {self._shape}")
 
     def __len__(self) -> int:
         return len(self._container.frame_group)

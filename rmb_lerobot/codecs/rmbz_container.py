@@ -5,11 +5,13 @@ Layout (little-endian)::
     b"RMBZ" | u32 header length | header (UTF-8 JSON: codec, version, step, shape, ...)
     payload: per frame [group IDR if the frame starts a group] + P packet + hole mask
     index: u32 (N, 4) [packet size, mask size, group, crc32] then u32 (G, 2) [IDR size, crc32]
-    footer: u64 index offset | u32 N | u32 G | u32 index crc32 | b"ZBMR"
+    footer: u64 index offset | u32 N | u32 G | u32 crc32 of header + index | b"ZBMR"
 
 Written front to back as frames arrive (nothing to seek back to); the index is written last,
-so a file whose writer did not finish has no footer and is rejected. Chosen over HDF5 because
-HDF5's own structures cost ~8-10 KB per file, 4 % of a 220-frame clean depth stream.
+so a file whose writer did not finish has no footer and is rejected. Checksums cover every
+payload byte (packets and masks per frame, IDRs per group) and the footer's covers header and
+index (format version 1 files: the index only). Chosen over HDF5 because HDF5's own
+structures cost ~8-10 KB per file, 4 % of a 220-frame clean depth stream.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ class ContainerWriter:
         self._file = open(path, "wb")  # noqa: SIM115 - closed in close()
         encoded = json.dumps(header, sort_keys=True).encode()
         self._file.write(MAGIC + struct.pack("<I", len(encoded)) + encoded)
+        self._header_crc = zlib.crc32(encoded)
         self._frames: list[tuple[int, int, int, int]] = []
         self._groups: list[tuple[int, int]] = []
 
@@ -55,14 +58,24 @@ class ContainerWriter:
             groups = np.asarray(self._groups, dtype="<u4").reshape(-1, 2)
             index = frames.tobytes() + groups.tobytes()
             self._file.write(index)
-            footer = (offset, len(frames), len(groups), zlib.crc32(index), END_MAGIC)
+            footer = (
+                offset,
+                len(frames),
+                len(groups),
+                zlib.crc32(index, self._header_crc),
+                END_MAGIC,
+            )
             self._file.write(_FOOTER.pack(*footer))
         finally:
             self._file.close()
 
 
 class ContainerReader:
-    """Header, index and byte ranges of an ``.rmbz`` file. Raises ValueError when malformed."""
+    """Header, index and byte ranges of an ``.rmbz`` file. Raises ValueError when malformed.
+
+    ``header_checked`` says whether the footer's checksum covers the header (files written
+    since format version 2) or the index only (version 1).
+    """
 
     def __init__(self, path: Path):
         self._file = open(path, "rb")  # noqa: SIM115 - closed in close()
@@ -78,8 +91,11 @@ class ContainerReader:
         if len(start) < 8 or start[:4] != MAGIC:
             raise ValueError("no RMBZ magic at the start")
         (header_size,) = struct.unpack("<I", start[4:])
+        raw_header = f.read(header_size)
         try:
-            self.header = json.loads(f.read(header_size))
+            self.header = json.loads(raw_header)
+            if not isinstance(self.header, dict):
+                raise ValueError(f"header is {type(self.header).__name__}, not an object")
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise ValueError(f"unreadable header ({exc})") from exc
         payload_start = 8 + header_size
@@ -93,8 +109,9 @@ class ContainerReader:
             raise ValueError("file is truncated or corrupt (bad footer: its writer did not finish)")
         f.seek(offset)
         index = f.read(index_size)
-        if zlib.crc32(index) != crc:
-            raise ValueError("frame index checksum mismatch")
+        self.header_checked = zlib.crc32(index, zlib.crc32(raw_header)) == crc
+        if not self.header_checked and zlib.crc32(index) != crc:
+            raise ValueError("header or frame index checksum mismatch")
         table = np.frombuffer(index, dtype="<u4").astype(np.int64)
         frames, groups = table[: 4 * n].reshape(n, 4), table[4 * n :].reshape(g, 2)
         self.frame_group, self.frame_crc = frames[:, 2], frames[:, 3]

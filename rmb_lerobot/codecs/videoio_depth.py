@@ -14,7 +14,8 @@ import av
 import numpy as np
 
 from rmb_lerobot.codecs.depth_base import DepthCodec, DepthReader, DepthWriter, as_depth_mm
-from rmb_lerobot.codecs.indexing import FrameIndex
+from rmb_lerobot.codecs.indexing import FrameIndex, resolve_index
+from rmb_lerobot.codecs.video import DEPTH_VIDEO_PIX_FMT as PIX_FMT
 from rmb_lerobot.codecs.video import VideoFileWriter, VideoFrameReader
 from rmb_lerobot.errors import RmbFormatError
 
@@ -46,7 +47,7 @@ class VideoioDepthWriter(DepthWriter):
         if gop is not None:
             options["g"] = str(gop)
         self._video = VideoFileWriter(
-            path, width, height, codec="libx264", pix_fmt="yuv444p", options=options
+            path, width, height, codec="libx264", pix_fmt=PIX_FMT, options=options
         )
         self.path = self._video.path
         self._zeros = np.zeros((self._video.height, self._video.width), dtype=np.uint8)
@@ -55,16 +56,31 @@ class VideoioDepthWriter(DepthWriter):
         shape = (self._video.height, self._video.width)
         y, v = fold_depth(as_depth_mm(frame, shape, self.path, len(self._video)))
         planes = np.stack([y, self._zeros, v])
-        self._video.encode(av.VideoFrame.from_ndarray(planes, format="yuv444p"))
+        self._video.encode(av.VideoFrame.from_ndarray(planes, format=PIX_FMT))
 
     def close(self) -> None:
         self._video.close()
 
 
 class VideoioDepthReader(DepthReader):
+    """uint16 mm frames of an RMB depth video.
+
+    Besides what :class:`VideoFrameReader` detects, every frame is checked against the
+    scheme: the stream must be yuv444p and the U plane all zeros. Damage that desynchronises
+    the lossless decoder almost always writes non-zero U values, where the V (high byte)
+    plane would otherwise decode to depths metres off.
+    """
+
     def __init__(self, path: str | Path):
         self._video = VideoFrameReader(path)
         self.path = self._video.path
+        if self._video.pix_fmt != PIX_FMT:
+            self._video.close()
+            raise RmbFormatError(
+                f"depth video stream is {self._video.pix_fmt}; expected {PIX_FMT} (RMB videoio "
+                "depth: Y = folded low byte, U = 0, V = high byte)",
+                path=self.path,
+            )
 
     def __len__(self) -> int:
         return len(self._video)
@@ -74,20 +90,22 @@ class VideoioDepthReader(DepthReader):
         return (len(self), self._video.height, self._video.width)
 
     def __getitem__(self, index: FrameIndex) -> np.ndarray:
-        frames = self._video.frames(index)
-        if isinstance(frames, av.VideoFrame):
-            return self._to_mm(frames)
+        positions, single = resolve_index(index, len(self))
+        frames = self._video.frames(positions)
+        if single:
+            return self._to_mm(positions[0], frames[0])
         if not frames:
             return np.empty((0, *self.shape[1:]), dtype=np.uint16)
-        return np.stack([self._to_mm(f) for f in frames])
+        return np.stack([self._to_mm(i, f) for i, f in zip(positions, frames, strict=True)])
 
-    def _to_mm(self, frame: av.VideoFrame) -> np.ndarray:
-        if frame.format.name != "yuv444p":
+    def _to_mm(self, i: int, frame: av.VideoFrame) -> np.ndarray:
+        planes = frame.to_ndarray(format=PIX_FMT)
+        if planes[1].any():
             raise RmbFormatError(
-                f"depth video frame is {frame.format.name}; expected yuv444p (RMB videoio)",
+                f"depth video frame {i} is corrupt: its U plane holds non-zero values; "
+                "expected U = 0 everywhere (RMB videoio depth)",
                 path=self.path,
             )
-        planes = frame.to_ndarray(format="yuv444p")
         return unfold_depth(planes[0], planes[2])
 
     def close(self) -> None:
