@@ -1,8 +1,25 @@
 """Read RMB episodes (``NAME.rmb/`` compact directories and ``NAME.hdf5`` single files).
 
-Everything is read lazily: opening an episode parses only the HDF5 header; low-dimensional
-keys are read on indexing and video frames are decoded by random access (seek to the nearest
-key frame), never the whole video for one sample as the original loader does.
+Everything is read lazily: opening an episode parses only the HDF5 header and the videos'
+packet indexes; low-dimensional keys are read on indexing and video frames are decoded by
+random access (seek to the nearest key frame), never the whole video for one sample as the
+original loader does.
+
+Bad data is an :class:`RmbFormatError` (or :class:`MissingKeyError`) naming the file, the key
+and the value. At open, from metadata only: attributes (UTF-8 text, name lists), flat layout,
+dtype and shape of every key against the catalogue and the robot the ``env`` attribute names
+(:mod:`rmb_lerobot.episode.validate`), and RGB images for every listed camera. On read:
+non-finite low-dimensional values (unless ``allow_non_finite=True``), step counts, and
+corrupt video (:class:`rmb_lerobot.codecs.video.VideoFrameReader`). :meth:`Episode.validate`
+checks everything but the decoding of every frame, cheaply (``frames=True`` adds it).
+
+What stays undetectable in videos: RMB's MP4s carry no checksums, so damage that leaves a
+syntactically valid H.264 stream decodes to wrong frames without any error. Byte flips in
+the slice data of lossy RGB (a residual coefficient, a motion vector, a quantiser) and of
+the lossless videoio depth (whose error then stays in the Y/V planes, metres off where the
+high byte is hit), and flips in the codec parameters in the ``avcC`` box (e.g. the initial
+quantiser) are of that kind. Flips in bytes no decoder reads (metadata, the encoder's
+settings string) change nothing. ``rmbz`` depth files checksum every byte.
 """
 
 from __future__ import annotations
@@ -17,9 +34,16 @@ import h5py
 import numpy as np
 
 from rmb_lerobot import keys as K
-from rmb_lerobot.codecs.depth import find_depth_file, mm_to_metres
+from rmb_lerobot.codecs.depth import DEPTH_CODECS, find_depth_file, mm_to_metres
 from rmb_lerobot.codecs.video import RgbVideoReader
-from rmb_lerobot.episode.layout import RGB_VIDEO_SUFFIX, EpisodeFormat, episode_format
+from rmb_lerobot.episode import validate as V
+from rmb_lerobot.episode.layout import (
+    RGB_VIDEO_SUFFIX,
+    EpisodeFormat,
+    episode_format,
+    rgb_video_path,
+)
+from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError
 
 logger = logging.getLogger(__name__)
@@ -28,12 +52,16 @@ Index = int | slice | list[int] | np.ndarray
 
 
 class H5Series:
-    """A lazily read HDF5 dataset: ``series[i]``/``series[a:b]`` read only what is asked."""
+    """A lazily read HDF5 dataset: ``series[i]``/``series[a:b]`` read only what is asked.
 
-    def __init__(self, dataset: h5py.Dataset, path: Path, transform=None):
+    ``check(data, index)`` (if given) inspects every read before ``transform``.
+    """
+
+    def __init__(self, dataset: h5py.Dataset, path: Path, transform=None, check=None):
         self._dataset = dataset
         self._path = path
         self._transform = transform
+        self._check = check
 
     def __len__(self) -> int:
         return self._dataset.shape[0]
@@ -54,12 +82,14 @@ class H5Series:
             data = self._read(uniq.tolist())[inverse]
         else:
             data = self._read(index)
+        if self._check is not None:
+            self._check(data, index)
         return data if self._transform is None else self._transform(data)
 
     def _read(self, index) -> np.ndarray:
         try:
             return np.asarray(self._dataset[index])
-        except (OSError, RuntimeError) as exc:
+        except (OSError, RuntimeError, KeyError) as exc:
             raise RmbFormatError(
                 f"cannot read data (corrupt or truncated HDF5?): {exc}",
                 path=self._path,
@@ -107,18 +137,6 @@ def _resize(images: np.ndarray, image_size: tuple[int, int], interpolation: int)
     return out[0] if single else np.stack(out) if out else images
 
 
-def _decode_attr(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8")
-    if isinstance(value, np.ndarray):
-        if value.dtype.kind in "OSU":
-            return [v.decode("utf-8") if isinstance(v, bytes) else str(v) for v in value.tolist()]
-        return value
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 class Episode:
     """One RMB episode. Use :func:`open_episode`; close it (or use ``with``) when done.
 
@@ -127,6 +145,12 @@ class Episode:
     ``ep["front_depth_image"][a:b]`` -> float32 metres NxHxW). With ``cache=True`` every
     ``ep[key]`` is loaded once into RAM and returned as a numpy array (RMB's option to load the
     whole dataset into memory).
+
+    Low-dimensional float keys holding NaN or +-inf raise :class:`RmbFormatError` when read
+    (naming the first such step), unless ``allow_non_finite=True``: RMB data is finite (its
+    real envs refuse non-finite commands), so such values mean a broken sensor or writer.
+    Depth images are not low-dimensional keys: their NaN, inf and negative values are
+    documented "no data" (0 in RMB's depth videos).
     """
 
     def __init__(
@@ -136,27 +160,42 @@ class Episode:
         image_size: tuple[int, int] | None = None,
         cache: bool = False,
         depth_interpolation: int = cv2.INTER_NEAREST,
+        allow_non_finite: bool = False,
     ):
         self.path = Path(path)
         self.format = episode_format(self.path)
         self.image_size = None if image_size is None else (int(image_size[0]), int(image_size[1]))
         self.cache = cache
+        self.allow_non_finite = allow_non_finite
         self._depth_interpolation = depth_interpolation
         self._cached: dict[str, np.ndarray] = {}
         self._open_series: list[VideoSeries] = []
         self._h5_path = self.format.hdf5_path(self.path)
-        if not self._h5_path.exists():
+        if not self._h5_path.is_file():
             raise RmbFormatError(
                 f"episode not found: expected {self.format.describe()}", path=self._h5_path
             )
         try:
             self._h5 = h5py.File(self._h5_path, "r")
-        except OSError as exc:
+        except V.H5_ERRORS as exc:
             raise RmbFormatError(
                 f"cannot open HDF5 file (truncated or corrupt?): {exc}", path=self._h5_path
             ) from exc
+        try:
+            self._open()
+        except BaseException:
+            self._h5.close()
+            raise
+
+    def _open(self) -> None:
+        """Read and check the header (no data): attributes, keys, dtypes, shapes, cameras."""
+        self.attrs: dict[str, Any] = V.read_attrs(self._h5, self._h5_path)
+        self._h5_names = V.dataset_names(self._h5, self._h5_path)
+        self._h5_datasets: dict[str, h5py.Dataset] = {n: self._h5[n] for n in self._h5_names}
+        specs = {n: (d.shape, d.dtype) for n, d in self._h5_datasets.items()}
+        V.check_datasets(specs, self._h5_path, self.attrs.get(K.ATTR_ENV))
         self._video_keys = self._scan_video_keys()
-        self.attrs: dict[str, Any] = self._read_attrs()
+        self._check_listed_cameras()
         self._length = self._infer_length()
 
     # ------------------------------------------------------------------ metadata
@@ -182,29 +221,45 @@ class Episode:
                 names.add(stem)
         return sorted(names)
 
-    def _read_attrs(self) -> dict[str, Any]:
-        attrs = {name: _decode_attr(value) for name, value in self._h5.attrs.items()}
-        for name in K.STRING_LIST_ATTRS:
-            # The original writes empty name lists as empty float64 arrays; normalise to [].
-            if isinstance(attrs.get(name), np.ndarray) and attrs[name].size == 0:
-                attrs[name] = []
-        return attrs
+    def _check_listed_cameras(self) -> None:
+        """Every camera the attributes list must have its images (see validate)."""
+        missing = V.check_names_have_images(self.attrs, self)
+        if not missing:
+            return
+        attr, camera, key = missing[0]
+        kind = "RGB" if K.is_rgb_image_key(key) else "depth"
+        if self.format is EpisodeFormat.COMPACT:
+            if K.is_rgb_image_key(key):
+                expected = rgb_video_path(self.path, key)
+            else:
+                expected = self.path / f"{key}{next(iter(DEPTH_CODECS.values())).file_suffix}"
+            where = f"expected {str(expected)!r} (or a dataset {key!r} in {K.COMPACT_MAIN_FILE})"
+        else:
+            expected = self._h5_path
+            where = f"expected a dataset {key!r} in this file"
+        raise MissingKeyError(
+            f"camera {camera!r} is listed in the {attr!r} attribute but has no {kind} images: "
+            f"{where}",
+            path=expected,
+            key=key,
+        )
 
     def _infer_length(self) -> int:
-        if K.TIME in self._h5:
-            return int(self._h5[K.TIME].shape[0])
-        for name in self._h5:
-            return int(self._h5[name].shape[0])
+        if K.TIME in self._h5_datasets:
+            return int(self._h5_datasets[K.TIME].shape[0])
+        for dataset in self._h5_datasets.values():
+            return int(dataset.shape[0])
         for key in self._video_keys:
-            return len(self._open_video(key))
+            with self._open_video(key) as reader:
+                return len(reader)
         return 0
 
     def keys(self) -> list[str]:
         """Every key of the episode: HDF5 datasets first, then video-backed image keys."""
-        return [*self._h5.keys(), *self._video_keys]
+        return [*self._h5_names, *self._video_keys]
 
     def __contains__(self, key: object) -> bool:
-        return key in self._h5 or key in self._video_keys
+        return key in self._h5_datasets or key in self._video_keys
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys())
@@ -224,17 +279,28 @@ class Episode:
         name = K.fovy_attr(camera)
         if name not in self.attrs:
             raise MissingKeyError("attribute missing", path=self._h5_path, key=name)
-        return float(self.attrs[name])
+        value = self.attrs[name]
+        try:
+            fovy = float(value)
+        except (TypeError, ValueError):
+            fovy = float("nan")
+        if not 0 < fovy < 180:
+            raise RmbFormatError(
+                f"attribute holds {value!r}; expected a field of view in degrees, 0 < fovy < 180",
+                path=self._h5_path,
+                key=name,
+            )
+        return fovy
 
     @property
     def fps(self) -> float:
-        """Control rate from the ``time`` key (never from the videos, which carry none)."""
-        t = np.asarray(self[K.TIME][:], dtype=np.float64)
-        if t.size < 2 or not np.all(np.diff(t) > 0):
-            raise RmbFormatError(
-                "'time' must hold at least two increasing values", path=self._h5_path, key=K.TIME
-            )
-        return float((t.size - 1) / (t[-1] - t[0]))
+        """Control rate (Hz) from the ``time`` key (never from the videos, which carry none).
+
+        The mean rate over the episode, after :func:`rmb_lerobot.episode.timing.control_rate`
+        checked that ``time`` is regular (every step at most 3 times the median step) and
+        plausible (1 to 1000 Hz).
+        """
+        return control_rate(self[K.TIME][:], path=self._h5_path, key=K.TIME)
 
     # ------------------------------------------------------------------ data
     def __getitem__(self, key: str):
@@ -247,15 +313,11 @@ class Episode:
     def _series(self, key: str):
         if key in self._video_keys:
             return self._video_series(key)
-        if key not in self._h5:
+        if key not in self._h5_datasets:
             raise MissingKeyError(
                 f"key not in episode; available: {self.keys()}", path=self.path, key=key
             )
-        dataset = self._h5[key]
-        if not isinstance(dataset, h5py.Dataset):
-            raise RmbFormatError(
-                "expected a dataset at the file root, found a group", path=self._h5_path, key=key
-            )
+        dataset = self._h5_datasets[key]
         if dataset.shape[0] != self._length:
             raise RmbFormatError(
                 f"has {dataset.shape[0]} steps but the episode has {self._length}",
@@ -266,7 +328,13 @@ class Episode:
             return H5Series(dataset, self._h5_path, self._rgb_transform)
         if K.is_depth_image_key(key):
             return H5Series(dataset, self._h5_path, self._depth_transform_metres)
-        return H5Series(dataset, self._h5_path)
+        check = None
+        if dataset.dtype.kind == "f" and not K.is_pointcloud_key(key) and not self.allow_non_finite:
+
+            def check(data: np.ndarray, index: Index) -> None:
+                V.check_finite(data, index, len(dataset), self._h5_path, key)
+
+        return H5Series(dataset, self._h5_path, check=check)
 
     def _open_video(self, key: str):
         path = self._video_keys[key]
@@ -307,12 +375,39 @@ class Episode:
         # background (flying pixels) and smear "no data" zeros.
         return _resize(depth, self.image_size, self._depth_interpolation)
 
-    def validate(self) -> None:
-        """Check that every key holds exactly ``len(self)`` steps (videos included)."""
+    def validate(self, *, frames: bool = False) -> None:
+        """Check all that is cheap to check; raise :class:`RmbFormatError` at the first fault.
+
+        Beyond what opening checked: every key holds ``len(self)`` steps (videos: frame count,
+        packet index, pixel format), low-dimensional values are finite (unless
+        ``allow_non_finite``), ``time`` is regular (:attr:`fps`), ``world_idx`` is an integer
+        and every depth camera's ``fovy`` attribute a field of view. ``frames=True`` also
+        decodes every video frame (slow: the only way to find corrupt frames).
+        """
         for key in self.keys():
             series = self._series(key)
             if isinstance(series, VideoSeries):
-                series.close()
+                try:
+                    if frames:
+                        for start in range(0, len(series), 32):
+                            series[start : start + 32]
+                finally:
+                    series.close()
+                    self._open_series.remove(series)
+            elif not K.is_image_key(key):
+                series[:]
+        if K.TIME in self:
+            self.fps  # noqa: B018 - checks regularity
+        world = self.attrs.get(K.ATTR_WORLD_IDX)
+        if world is not None and not isinstance(world, int | np.integer):
+            raise RmbFormatError(
+                f"attribute holds {world!r}; expected an integer world index",
+                path=self._h5_path,
+                key=K.ATTR_WORLD_IDX,
+            )
+        for key in self.keys():
+            if K.is_depth_image_key(key) and K.fovy_attr(K.camera_of(key)) in self.attrs:
+                self.fovy(K.camera_of(key))
 
     # ------------------------------------------------------------------ lifetime
     def close(self) -> None:
@@ -333,14 +428,20 @@ class Episode:
 
 
 def open_episode(
-    path: str | Path, *, image_size: tuple[int, int] | None = None, cache: bool = False
+    path: str | Path,
+    *,
+    image_size: tuple[int, int] | None = None,
+    cache: bool = False,
+    allow_non_finite: bool = False,
 ) -> Episode:
     """Open an RMB episode (``.rmb`` directory or ``.hdf5`` file) for reading.
 
     ``image_size=(width, height)`` resizes images on read (like RMB's loader); ``cache=True``
-    keeps every key read in RAM.
+    keeps every key read in RAM; ``allow_non_finite=True`` returns NaN/inf in low-dimensional
+    keys instead of raising (see :class:`Episode`). Raises :class:`RmbFormatError` for data
+    that breaks the RMB format (see the module documentation).
     """
-    return Episode(path, image_size=image_size, cache=cache)
+    return Episode(path, image_size=image_size, cache=cache, allow_non_finite=allow_non_finite)
 
 
 def find_episodes(*sources: str | Path) -> list[Path]:
