@@ -26,5 +26,6 @@ def push_dataset(
     tags: Sequence[str] = (),
 ) -> None:
     """Upload the dataset at ``root`` to ``repo_id`` (videos, ``meta/rmb.json`` and all)."""
-    dataset = LeRobotDataset(check_repo_id(repo_id), root=root)
+    # Uploading decodes nothing; naming the backend keeps LeRobot from probing torchcodec.
+    dataset = LeRobotDataset(check_repo_id(repo_id), root=root, video_backend="pyav")
     dataset.push_to_hub(branch=branch, tags=[*TAGS, *tags], private=private)

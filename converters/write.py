@@ -116,6 +116,9 @@ def create_dataset(
         rgb_encoder=video.rgb_encoder(),
         depth_encoder=quiet_depth_encoder(),
         streaming_encoding=True,
+        # Named, so that LeRobot does not probe torchcodec (a broken install prints its loading
+        # traceback; an absent one a warning): only writing happens here.
+        video_backend="pyav",
     )
 
 

@@ -84,6 +84,9 @@ def test_converted_dataset_decodes_without_torchcodec_noise(tmp_path, record):
     )
     assert convert.returncode == 0, convert.stderr[-3000:]
     _assert_quiet(convert.stderr)
+    # Only writing happens there: the converter names its backend, so LeRobot never probes
+    # torchcodec (not even its one-line "not available" warning).
+    assert "torchcodec" not in convert.stderr, convert.stderr[-3000:]
 
     read = _run(["-c", READ_DATASET, str(root), N.image_key("front")], tmp_path)
     assert read.returncode == 0, read.stderr[-3000:]
