@@ -72,3 +72,13 @@ def test_camera_key_helpers():
     assert K.camera_keys(["front", "hand"], depth=False) == ["front_rgb_image", "hand_rgb_image"]
     with pytest.raises(ValueError, match="not a camera key"):
         K.camera_of("measured_joint_pos")
+
+
+def test_layout_for_env_knows_the_ur5e_envs_by_exact_name():
+    assert K.layout_for_env("MujocoUR5eCableEnv") == K.UR5E_LAYOUT  # the original's and ours
+    assert K.layout_for_env("RealUR5eDemoEnv") == K.UR5E_LAYOUT
+    assert K.layout_for_env("MujocoUR5eCabinetHingeEnv") == K.UR5E_LAYOUT  # from our registry
+    assert K.layout_for_env("MujocoUR5eDualCableEnv") is None  # two arms, not a UR5e
+    assert K.layout_for_env("MujocoUR5eCable") is None  # RMB writes the class name with "Env"
+    assert K.layout_for_env("MujocoXarm7CableEnv") is None  # not in the catalogue yet
+    assert K.layout_for_env(None) is None and K.layout_for_env(b"MujocoUR5eCableEnv") is None
