@@ -190,9 +190,9 @@ class Episode:
     def _open(self) -> None:
         """Read and check the header (no data): attributes, keys, dtypes, shapes, cameras."""
         self.attrs: dict[str, Any] = V.read_attrs(self._h5, self._h5_path)
-        self._h5_names = V.dataset_names(self._h5, self._h5_path)
-        self._h5_datasets: dict[str, h5py.Dataset] = {n: self._h5[n] for n in self._h5_names}
-        specs = {n: (d.shape, d.dtype) for n, d in self._h5_datasets.items()}
+        self._h5_ids, specs = V.datasets(self._h5, self._h5_path)
+        self._h5_names = list(self._h5_ids)
+        self._h5_datasets: dict[str, h5py.Dataset] = {}  # made on first use
         V.check_datasets(specs, self._h5_path, self.attrs.get(K.ATTR_ENV))
         self._video_keys = self._scan_video_keys()
         self._check_listed_cameras()
@@ -245,9 +245,9 @@ class Episode:
         )
 
     def _infer_length(self) -> int:
-        if K.TIME in self._h5_datasets:
-            return int(self._h5_datasets[K.TIME].shape[0])
-        for dataset in self._h5_datasets.values():
+        if K.TIME in self._h5_ids:
+            return int(self._h5_ids[K.TIME].shape[0])
+        for dataset in self._h5_ids.values():
             return int(dataset.shape[0])
         for key in self._video_keys:
             with self._open_video(key) as reader:
@@ -259,7 +259,7 @@ class Episode:
         return [*self._h5_names, *self._video_keys]
 
     def __contains__(self, key: object) -> bool:
-        return key in self._h5_datasets or key in self._video_keys
+        return key in self._h5_ids or key in self._video_keys
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys())
@@ -313,11 +313,13 @@ class Episode:
     def _series(self, key: str):
         if key in self._video_keys:
             return self._video_series(key)
-        if key not in self._h5_datasets:
+        if key not in self._h5_ids:
             raise MissingKeyError(
                 f"key not in episode; available: {self.keys()}", path=self.path, key=key
             )
-        dataset = self._h5_datasets[key]
+        dataset = self._h5_datasets.get(key)
+        if dataset is None:
+            dataset = self._h5_datasets[key] = h5py.Dataset(self._h5_ids[key])
         if dataset.shape[0] != self._length:
             raise RmbFormatError(
                 f"has {dataset.shape[0]} steps but the episode has {self._length}",
