@@ -33,13 +33,14 @@ def to_float32(
 ) -> np.ndarray:
     """``values`` ``(T, ...)`` as float32; row ``i`` is dataset frame ``i`` (``skip`` apart)."""
     values = np.asarray(values)
-    converted = values.astype(np.float32)
+    with np.errstate(over="ignore"):  # overflow is reported below, with its place
+        converted = values.astype(np.float32)
     if values.dtype.kind not in "fc":
         return converted  # integers and booleans are always finite
     finite = np.isfinite(values)
     if not allow_non_finite and not finite.all():
         row, *col = np.argwhere(~finite)[0]
-        value = values[(row, *col)]
+        value = float(values[(row, *col)].real)
         count = int((~finite).sum())
         raise RmbFormatError(
             f"{value} at {_step(int(row), skip)}, component {tuple(int(c) for c in col)} "
@@ -52,7 +53,7 @@ def to_float32(
     if overflow.any():
         row, *col = np.argwhere(overflow)[0]
         raise RmbFormatError(
-            f"{values[(row, *col)]!r} at {_step(int(row), skip)}, component "
+            f"{float(values[(row, *col)])!r} at {_step(int(row), skip)}, component "
             f"{tuple(int(c) for c in col)} is beyond float32's range (+-{FLOAT32_MAX:.4g}), the "
             f"dataset's dtype ({int(overflow.sum())} such values); expected values in range",
             path=path,

@@ -35,6 +35,7 @@ from rmb_lerobot.converters.schema import uses_policy_view
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter
+from rmb_lerobot.episode.validate import check_names_have_images
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError
 from rmb_lerobot.pose import POLICY_POSE_DIM, policy_to_pose
 
@@ -131,7 +132,11 @@ def _safe_name(name: str) -> str:
 
 
 class _EpisodeAttrs:
-    """RMB attributes per episode: from ``meta/rmb.json`` when present, else built."""
+    """RMB attributes per episode: from ``meta/rmb.json`` when present, else built.
+
+    Camera name lists keep only cameras whose images the episode gets (a dataset converted
+    with ``--camera-names`` lacks the others): RMB lists a camera only if it recorded it.
+    """
 
     def __init__(self, dataset: LeRobotDataset, rmb_meta: Mapping | None, mapping: KeyMapping):
         self._dataset = dataset
@@ -139,6 +144,13 @@ class _EpisodeAttrs:
         self._stored = {ep["episode_index"]: ep for ep in (rmb_meta or {}).get("episodes", [])}
 
     def __call__(self, index: int) -> dict[str, Any]:
+        attrs = self._attrs(index)
+        present = set(self._mapping.images.values())
+        for attr, camera, _ in check_names_have_images(attrs, present):
+            attrs[attr] = [name for name in attrs[attr] if name != camera]
+        return attrs
+
+    def _attrs(self, index: int) -> dict[str, Any]:
         stored = self._stored.get(index)
         if stored is not None:
             attrs = checked_attrs(stored["attrs"], self._dataset.root / N.RMB_METADATA_PATH)

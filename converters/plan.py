@@ -1,10 +1,11 @@
 """Check every source episode before writing anything, and fix what the dataset will hold.
 
-Opening an episode reads only its HDF5 header and video indexes, so every episode is checked
-up front: the keys named in ``--state-keys``/``--action-keys``/``--camera-names`` exist, all
-episodes come from one env at one regular frame rate (:func:`.rate.control_rate`), their keys
-and image sizes agree and their attributes are valid (:mod:`.attrs`). Each error names the file
-and the key.
+Opening an episode reads only its HDF5 header and video indexes, and low-dimensional data is
+small, so every episode is checked up front: the keys named in ``--state-keys``/
+``--action-keys``/``--camera-names`` exist, all episodes come from one env at one regular frame
+rate (:func:`rmb_lerobot.episode.timing.control_rate`; with ``--fps`` its errors are warnings),
+their keys and image sizes agree, their attributes are valid (:mod:`.attrs`) and their values
+finite and within float32 (:mod:`.cast`). Each error names the file and the key.
 
 Every episode is opened with :func:`open_source`, which passes ``allow_non_finite`` on to the
 reader: by default an episode with NaN/inf in a low-dimensional key is refused.
@@ -19,13 +20,16 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from rmb_lerobot.converters.attrs import checked_attrs
-from rmb_lerobot.converters.rate import control_rate, nominal_rate, same_rate
+from rmb_lerobot.converters.cast import to_float32
+from rmb_lerobot.converters.rate import nominal_rate, same_rate
 from rmb_lerobot.converters.schema import DatasetSchema, build_schema
 from rmb_lerobot.envs.registry import ROBOTS
 
 from rmb_lerobot import keys as K
 from rmb_lerobot.episode import Episode, open_episode
+from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError
 
 logger = logging.getLogger(__name__)
@@ -88,9 +92,7 @@ def open_source(path: str | Path, allow_non_finite: bool = False) -> Episode:
     The reader refuses NaN/inf in low-dimensional keys unless ``allow_non_finite``; the
     converter checks again where values enter the dataset (:mod:`.cast`).
     """
-    if allow_non_finite:
-        return open_episode(path, allow_non_finite=True)
-    return open_episode(path)  # the reader's default: refuse
+    return open_episode(path, allow_non_finite=allow_non_finite)
 
 
 def robot_type_of(env: str) -> str:
@@ -154,11 +156,14 @@ class _Checker:
         """The episode's control rate; with ``--fps`` given, a bad ``time`` only warns."""
         if K.TIME not in episode:
             return None
+        time = episode[K.TIME][:]  # the reader refuses NaN/inf here, --fps or not
         try:
-            return control_rate(episode[K.TIME][:], path=episode.path)
+            return control_rate(time, path=episode.path)
         except RmbFormatError as exc:
             if options.fps is None:
-                raise
+                error = RmbFormatError(f"{exc}; to convert anyway, pass --fps RATE (the true rate)")
+                error.path, error.key = exc.path, exc.key
+                raise error from exc
             logger.warning("%s; using --fps %s", exc, options.fps)
             return None
 
@@ -222,6 +227,15 @@ class _Checker:
         return rate
 
 
+def _check_values(episode: Episode, keys: Sequence[str], allow_non_finite: bool) -> None:
+    """Read the keys to convert now, so bad values fail before anything is written: the reader
+    refuses NaN/inf, :func:`.cast.to_float32` values beyond float32 (the writer casts again)."""
+    for key in keys:
+        values = np.asarray(episode[key][:])
+        flat = values.reshape(len(values), -1)
+        to_float32(flat, key, path=episode.path, allow_non_finite=allow_non_finite)
+
+
 def _hz(rate: float | None) -> str:
     return "an unknown rate (no 'time' key)" if rate is None else f"{rate:.6g} Hz"
 
@@ -238,6 +252,8 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
             if checker is None:
                 checker = _Checker(episode, options)
             rate = checker.check(episode)
+            converted = [k for k in checker.lowdim if not K.is_pointcloud_key(k)]
+            _check_values(episode, converted, options.allow_non_finite)
             task = options.task or str(attrs.get(K.ATTR_TASK_DESC) or checker.env)
             length = -(-len(episode) // options.skip)
             sources.append(EpisodeSource(Path(path), length, task, attrs, rate))

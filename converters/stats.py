@@ -68,29 +68,26 @@ def finite_episode_stats(episode_data: dict, features: dict, quantile_list=None)
 
 
 def refresh_finite_stats(root: Path) -> list[str]:
-    """Recompute ``meta/stats.json`` entries that aggregation left NaN, from the data files.
+    """Recompute ``meta/stats.json`` for features whose data hold NaN/inf, from all frames.
 
-    LeRobot aggregates per-episode statistics; one episode whose dimension has no finite value
-    makes that dimension NaN for the whole dataset. Recomputing from all frames gives the
-    statistics of every finite value instead. Returns the features rewritten.
+    LeRobot aggregates per-episode statistics weighted by frame counts, which for such features
+    count frames whose value was not used (and one episode whose dimension has no finite value
+    makes that dimension NaN for the whole dataset). Recomputed from the data files, the
+    statistics are exactly those of every finite value. Returns the features rewritten.
     """
-    stats = load_stats(root)
-    if not stats:
-        return []
+    stats = load_stats(root) or {}
     features = load_info(root).features
-    stale = [
-        key
-        for key, feature_stats in stats.items()
-        if key in features
-        and _is_numeric(features[key])
-        and any(np.isnan(np.asarray(v, dtype=np.float64)).any() for v in feature_stats.values())
-    ]
-    if not stale:
-        return []
+    numeric = [key for key, feature in features.items() if _is_numeric(feature)]
     files = sorted((Path(root) / "data").rglob("*.parquet"))
-    table = pq.ParquetDataset(files).read(columns=stale) if files else None
-    for key in stale:
-        column = table.column(key).to_pylist()
-        stats[key] = finite_feature_stats(np.asarray(column, dtype=np.float64))
-    write_stats(stats, root)
-    return stale
+    if not files or not numeric:
+        return []
+    table = pq.ParquetDataset(files).read(columns=numeric)
+    rewritten = []
+    for key in numeric:
+        data = np.asarray(table.column(key).to_pylist(), dtype=np.float64)
+        if has_non_finite(data):
+            stats[key] = finite_feature_stats(data)
+            rewritten.append(key)
+    if rewritten:
+        write_stats(stats, root)
+    return rewritten

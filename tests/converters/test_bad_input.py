@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import json
+import re
 
 import h5py
+import numpy as np
 import pytest
+from lerobot.datasets.lerobot_dataset import LeRobotDataset
 from rmb_lerobot.converters import ConvertOptions, to_lerobot
 from rmb_lerobot.converters.encoder import ConversionDataset
 
 from rmb_lerobot import EpisodeWriter, RmbFormatError, find_episodes
 from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
 
 
 def _convert(src, dest, **options):
@@ -138,3 +142,117 @@ def test_episode_without_time_needs_fps(tmp_path, steps, attrs):
     _convert(path.parent, root, fps="125/4", camera_names=("front",))
     assert (root / "meta" / "info.json").is_file()
     assert json.loads((root / "meta" / "info.json").read_text())["fps"] == 31.25
+
+
+def _set(path, key, index, value):
+    """Write ``value`` at ``index`` of an episode's HDF5 dataset ``key`` (as float64)."""
+    main = path / K.COMPACT_MAIN_FILE if path.suffix == ".rmb" else path
+    with h5py.File(main, "r+") as h5:
+        data = h5[key][()].astype(np.float64)
+        data[index] = value
+        del h5[key]
+        h5.create_dataset(key, data=data)
+
+
+def test_nan_in_a_lowdim_key_is_refused_naming_file_key_and_step(
+    demo_copy, tmp_path, hidden_entries
+):
+    second = find_episodes(demo_copy)[1]
+    _set(second, K.MEASURED_JOINT_POS, (5, 2), np.nan)
+    dest = tmp_path / "ds"
+    with pytest.raises(RmbFormatError) as err:
+        _convert(demo_copy, dest)
+    message = str(err.value)
+    assert second.name in message and K.MEASURED_JOINT_POS in message
+    assert re.search(r"\bnan\b", message) and re.search(r"\b5\b", message), message
+    _assert_nothing_written(dest, hidden_entries)
+
+
+def test_allow_non_finite_keeps_nan_and_computes_stats_over_finite_values(demo_copy, tmp_path):
+    first = find_episodes(demo_copy)[0]
+    _set(first, K.MEASURED_JOINT_POS, (5, 2), np.nan)
+    _set(first, K.MEASURED_JOINT_POS, (6, 3), np.inf)
+    dest = tmp_path / "ds"
+    _convert(demo_copy, dest, camera_names=("hand",), allow_non_finite=True)
+    state = np.stack(
+        LeRobotDataset("local/ds", root=dest).hf_dataset.with_format("numpy")[:][N.STATE]
+    )
+    assert np.isnan(state[5, 2]) and np.isposinf(state[6, 3])
+    stats = json.loads((dest / "meta" / "stats.json").read_text())[N.STATE]
+    masked = np.ma.masked_invalid(state.astype(np.float64))
+    np.testing.assert_allclose(stats["min"], masked.min(axis=0), rtol=1e-6)
+    np.testing.assert_allclose(stats["max"], masked.max(axis=0), rtol=1e-6)
+    np.testing.assert_allclose(stats["mean"], masked.mean(axis=0), rtol=1e-5)
+    assert stats["count"] == [len(state)]
+
+
+def test_a_value_beyond_float32_is_refused_at_the_cast(demo_copy, tmp_path, hidden_entries):
+    second = find_episodes(demo_copy)[1]
+    _set(second, K.COMMAND_JOINT_POS, (7, 1), 1e39)
+    dest = tmp_path / "ds"
+    with pytest.raises(RmbFormatError, match="beyond float32's range") as err:
+        _convert(demo_copy, dest)
+    message = str(err.value)
+    assert second.name in message and K.COMMAND_JOINT_POS in message
+    assert "1e+39 at step 7, component (1,)" in message
+    _assert_nothing_written(dest, hidden_entries)
+
+
+def _retime(path, change):
+    with h5py.File(path / K.COMPACT_MAIN_FILE, "r+") as h5:
+        time = h5[K.TIME][()]
+        del h5[K.TIME]
+        h5.create_dataset(K.TIME, data=change(time))
+
+
+def _gap(time):
+    time = time.copy()
+    time[10:] += 0.3
+    return time
+
+
+def test_a_gap_in_time_is_refused_unless_fps_is_given(demo_copy, tmp_path, caplog):
+    second = find_episodes(demo_copy)[1]
+    _retime(second, _gap)
+    with pytest.raises(RmbFormatError, match=r"'time' jumps by 0\.332 s at step 10") as err:
+        _convert(demo_copy, tmp_path / "ds")
+    assert second.name in str(err.value) and "pass --fps RATE" in str(err.value)
+    dest = tmp_path / "ds"
+    _convert(demo_copy, dest, fps="125/4", camera_names=("hand",))  # the user asserts the rate
+    assert json.loads((dest / "meta" / "info.json").read_text())["fps"] == 31.25
+    warned = [r.getMessage() for r in caplog.records if "jumps by" in r.getMessage()]
+    assert warned and second.name in warned[0] and "using --fps 125/4" in warned[0]
+
+
+def test_time_in_milliseconds_is_refused(demo_copy, tmp_path):
+    first = find_episodes(demo_copy)[0]
+    _retime(first, lambda time: time * 1000)
+    with pytest.raises(RmbFormatError, match=r"0\.03125 Hz .* in milliseconds") as err:
+        _convert(demo_copy, tmp_path / "ds")
+    assert first.name in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("attr", "value", "expected"),
+    [
+        ("hand_depth_image_fovy", "wide", "field of view"),
+        ("hand_depth_image_fovy", np.nan, "field of view"),
+        ("front_depth_image_fovy", 180.0, "field of view"),
+        ("world_idx", "3", "an integer"),
+        ("world_idx", 1.5, "an integer"),
+        ("camera_names", 7, "list of"),
+        ("task_desc", 42, "string"),
+        ("recorded_by", np.array([1.0, np.nan]), "a finite number"),
+    ],
+)
+def test_bad_attributes_are_refused_naming_file_and_attribute(
+    demo_copy, tmp_path, hidden_entries, attr, value, expected
+):
+    second = find_episodes(demo_copy)[1]
+    _retag(second, **{attr: value})
+    dest = tmp_path / "ds"
+    with pytest.raises(RmbFormatError, match=expected) as err:
+        _convert(demo_copy, dest)
+    message = str(err.value)
+    assert repr(attr) in message and str(second / K.COMPACT_MAIN_FILE) in message
+    _assert_nothing_written(dest, hidden_entries)

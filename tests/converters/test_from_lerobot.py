@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from lerobot.configs import DepthEncoderConfig, RGBEncoderConfig
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
@@ -135,20 +137,76 @@ def test_a_lerobot_record_dataset_maps_by_the_documented_defaults(recorded, tmp_
 
 
 def test_overrides_split_the_state_and_rename_features(recorded, tmp_path):
-    overrides = MappingOverrides(
-        state_keys=("measured_joint_pos:4", "measured_gripper_joint_pos"),
+    renamed = MappingOverrides(
         cameras={"observation.images.laptop": "front", "observation.images.laptop_depth": "front"},
         keys={"observation.effort": "measured_joint_torque"},
     )
-    written = from_lerobot(
-        root=recorded, output=tmp_path / "out", episodes=[0], overrides=overrides, progress=False
+    (written,) = from_lerobot(
+        root=recorded, output=tmp_path / "out", episodes=[0], overrides=renamed, progress=False
     )
-    with open_episode(written[0]) as ep:
-        assert ep[K.MEASURED_JOINT_POS].shape == (10, 4)
-        assert ep[K.MEASURED_GRIPPER_JOINT_POS].shape == (10, 1)
+    with open_episode(written) as ep:
         assert ep["measured_joint_torque"].shape == (10, 5)
         assert ep.camera_names == ["front", "wrist"] and "front_depth_image" in ep
+    split = MappingOverrides(
+        state_keys=("measured_joint_pos:4", "measured_gripper_joint_pos"),
+        action_keys=("command_joint_pos:4", "command_gripper_joint_pos"),  # measured = command
+    )
+    (written,) = from_lerobot(
+        root=recorded, output=tmp_path / "split", episodes=[0], overrides=split, progress=False
+    )
+    with open_episode(written) as ep:
+        assert ep[K.MEASURED_JOINT_POS].shape == ep[K.COMMAND_JOINT_POS].shape == (10, 4)
+        assert ep[K.MEASURED_GRIPPER_JOINT_POS].shape == (10, 1)
     bad = MappingOverrides(state_keys=("measured_joint_pos:3", "measured_gripper_joint_pos:1"))
     with pytest.raises(RmbFormatError, match="has 5 numbers but the mapping"):
         from_lerobot(root=recorded, output=tmp_path / "bad", overrides=bad, progress=False)
     assert not (tmp_path / "bad").exists()
+
+
+@pytest.fixture
+def dataset_with_nan(tmp_path):
+    """A small dataset without videos whose ``observation.state`` holds NaN at frame 3 of
+    episode 1 (written into the parquet: LeRobot's writer cannot compute stats over NaN)."""
+    root = tmp_path / "nan_ds"
+    vector = {"dtype": "float32", "shape": (3,), "names": ["a", "b", "c"]}
+    features = {"observation.state": vector, "action": vector}
+    dataset = LeRobotDataset.create("user/nan", fps=10, features=features, root=root)
+    for episode in range(2):
+        for i in range(6):
+            value = np.full(3, episode * 10 + i, np.float32)
+            dataset.add_frame({"observation.state": value, "action": value, "task": "t"})
+        dataset.save_episode()
+    dataset.finalize()
+    (data,) = (root / "data").rglob("*.parquet")
+    table = pq.read_table(data)
+    states = np.stack(table.column("observation.state").to_numpy(zero_copy_only=False))
+    states[6 + 3, 1] = np.nan
+    column = pa.array(list(states), type=table.schema.field("observation.state").type)
+    index = table.schema.get_field_index("observation.state")
+    pq.write_table(table.set_column(index, "observation.state", column), data)
+    return root
+
+
+def test_nan_in_the_dataset_is_refused_unless_allowed(dataset_with_nan, tmp_path):
+    out = tmp_path / "out"
+    with pytest.raises(RmbFormatError) as err:
+        from_lerobot(root=dataset_with_nan, output=out, progress=False)
+    message = str(err.value)
+    assert "nan in episode 1, frame 3, component 1" in message and "'observation.state'" in message
+    assert str(dataset_with_nan) in message and "--allow-non-finite" in message
+    assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["nan_ds"]
+
+    written = from_lerobot(root=dataset_with_nan, output=out, allow_non_finite=True, progress=False)
+    with open_episode(written[1], allow_non_finite=True) as ep:
+        state = ep[K.MEASURED_JOINT_POS][:]
+    assert np.isnan(state[3, 1]) and state[4, 1] == 14
+
+
+def test_stale_temporaries_of_a_killed_run_are_removed(converted_depth, tmp_path, caplog):
+    stale = tmp_path / ".out.tmp-0123456789ab"  # what a killed run leaves: unlocked lock
+    (stale / "episode.rmb").mkdir(parents=True)
+    (tmp_path / ".out.tmp-0123456789ab.tmp").mkdir()
+    (tmp_path / ".out.tmp-0123456789ab.lock").write_text("pid 1\n")
+    from_lerobot(root=converted_depth, output=tmp_path / "out", episodes=[0], progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    assert any("stale" in r.getMessage() for r in caplog.records)

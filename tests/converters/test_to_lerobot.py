@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
+import tempfile
+from fractions import Fraction
+from pathlib import Path
 
+import av
+import h5py
 import numpy as np
 import pytest
 import torch
 from lerobot.configs import DepthEncoderConfig
+from lerobot.datasets import dataset_writer, video_utils
 from lerobot.datasets.lerobot_dataset import LeRobotDataset, LeRobotDatasetMetadata
 from lerobot.scripts import lerobot_dataset_viz as viz
 from rmb_lerobot.converters import ConvertOptions, to_lerobot
@@ -163,3 +171,70 @@ def test_eef_pose_state_uses_the_policy_view_and_keeps_the_raw_pose(demos, tmp_p
         policy = pose_to_policy(ep[K.MEASURED_EEF_POSE][3])
         np.testing.assert_allclose(item[N.STATE][:9].numpy(), policy, atol=1e-6)
         assert item["task"] == "put the peg in"
+
+
+def test_each_video_states_the_true_frame_rate(converted_depth):
+    info = json.loads((converted_depth / "meta" / "info.json").read_text())
+    videos = {k: f for k, f in info["features"].items() if f["dtype"] == "video"}
+    assert len(videos) == 4 and info["fps"] == RATE
+    for key, feature in videos.items():
+        assert feature["info"]["video.fps"] == RATE, key  # LeRobot wrote int(125/4) = 31
+        video = info["video_path"].format(video_key=key, chunk_index=0, file_index=0)
+        with av.open(str(converted_depth / video)) as container:
+            assert container.streams.video[0].average_rate == Fraction(125, 4), key
+
+
+def test_depth_stats_describe_the_stored_clamped_depth(tmp_path, record, caplog):
+    """Beyond LeRobot's depth range (10 m) values are stored clamped; stats must say so."""
+    episode = record(tmp_path / "src" / "far.hdf5")
+    with h5py.File(episode, "r+") as h5:
+        depth = h5["front_depth_image"][()]
+        depth[3, :4, :4] = 12.8
+        depth[4, 0, 0] = np.inf
+        depth[5, 0, 0] = np.nan
+        h5["front_depth_image"][...] = depth
+    root = tmp_path / "ds"
+    options = ConvertOptions(camera_names=("front",), depth=True)
+    to_lerobot([episode.parent], output=root, options=options, video_codec="h264", progress=False)
+    key = N.depth_image_key("front")
+    stats = json.loads((root / "meta" / "stats.json").read_text())[key]
+    assert np.ravel(stats["max"])[0] == pytest.approx(10.0)  # not 12.8, not inf
+    assert np.isfinite(np.ravel(stats["mean"])[0])
+    assert np.ravel(stats["min"])[0] == pytest.approx(0.01)  # the no-data zeros, as stored
+    stored_mm = _load(root)[3][key][0].numpy()
+    assert stored_mm.max() == pytest.approx(10_000, abs=_max_depth_error_mm(np.array(10.0)))
+    warned = [r.getMessage() for r in caplog.records if "beyond 10 m" in r.getMessage()]
+    assert warned and "far.hdf5" in warned[0] and "18 depth values" in warned[0]
+
+
+def test_files_are_shared_readable_under_the_umask(demos, tmp_path):
+    previous = os.umask(0o022)
+    try:
+        root = tmp_path / "ds"
+        to_lerobot([demos], output=root, video_codec="h264", progress=False)
+    finally:
+        os.umask(previous)
+    modes = {p.relative_to(root): stat.S_IMODE(p.stat().st_mode) for p in root.rglob("*")}
+    assert any(p.suffix == ".mp4" for p in modes)
+    for path, mode in modes.items():
+        expected = 0o755 if (root / path).is_dir() else 0o644
+        assert mode == expected, f"{path}: {oct(mode)}"
+    assert stat.S_IMODE(root.stat().st_mode) == 0o755
+
+
+def test_library_temporaries_go_to_the_staging(demos, tmp_path, monkeypatch):
+    """LeRobot joins episode videos through ``tempfile`` files: inside the staging, where a
+    killed run's leftovers are found and removed, not in $TMPDIR."""
+    seen = []
+    original = video_utils.concatenate_video_files
+
+    def spy(*args, **kwargs):
+        seen.append(Path(tempfile.gettempdir()))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(dataset_writer, "concatenate_video_files", spy)
+    before = tempfile.tempdir
+    root = tmp_path / "ds"
+    to_lerobot([demos], output=root, options=ConvertOptions(camera_names=("hand",)), progress=False)
+    assert seen and all(p.parent == tmp_path and p.name.startswith(".ds.tmp-") for p in seen)
+    assert tempfile.tempdir == before
