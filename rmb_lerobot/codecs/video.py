@@ -66,7 +66,9 @@ class _LibavErrors:
     so the level is raised to ERROR while any reader is inside such a block (and put back
     when the last one leaves); this thread's messages are captured rather than printed.
     Errors are counted with libav's own counter, which also sees messages the log
-    de-duplicates (reading a corrupt frame twice logs the same line twice).
+    de-duplicates (reading a corrupt frame twice logs the same line twice). The counter is
+    process-wide: another thread decoding a damaged stream at the same moment would make this
+    block report its error too (never the reverse: no corruption is missed).
     """
 
     def __enter__(self) -> _LibavErrors:

@@ -1,9 +1,9 @@
 """Read RMB episodes (``NAME.rmb/`` compact directories and ``NAME.hdf5`` single files).
 
-Everything is read lazily: opening an episode parses only the HDF5 header and the videos'
-packet indexes; low-dimensional keys are read on indexing and video frames are decoded by
-random access (seek to the nearest key frame), never the whole video for one sample as the
-original loader does.
+Everything is read lazily: opening an episode parses only the HDF5 header (a video's packet
+index is read when its key is first used); low-dimensional keys are read on indexing and video
+frames are decoded by random access (seek to the nearest key frame), never the whole video for
+one sample as the original loader does.
 
 Bad data is an :class:`RmbFormatError` (or :class:`MissingKeyError`) naming the file, the key
 and the value. At open, from metadata only: attributes (UTF-8 text, name lists), flat layout,
@@ -149,8 +149,8 @@ class Episode:
     Low-dimensional float keys holding NaN or +-inf raise :class:`RmbFormatError` when read
     (naming the first such step), unless ``allow_non_finite=True``: RMB data is finite (its
     real envs refuse non-finite commands), so such values mean a broken sensor or writer.
-    Depth images are not low-dimensional keys: their NaN, inf and negative values are
-    documented "no data" (0 in RMB's depth videos).
+    Depth images and point clouds are not checked: NaN, inf and negative depths mean "no
+    data" (depth videos store them as 0; HDF5 depth is returned as stored).
     """
 
     def __init__(
