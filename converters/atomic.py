@@ -9,9 +9,10 @@ What a killed run leaves (the hidden temporary, its scratch siblings) is removed
 conversion into the same directory (:func:`prepare_destination`, via
 :func:`~rmb_lerobot.staging.remove_stale`), which tells it from a live run's by its lock.
 
-Temporary files of the libraries we call (LeRobot's video concatenation, multiprocessing's
-``pymp-*`` directory) go into the staging's scratch sibling ``.tmp`` too, so a killed run leaves
-nothing in ``$TMPDIR`` either; see :func:`staged_output`.
+Temporary files of the libraries we call (LeRobot joins episode videos through ``tempfile``)
+go into the staging's scratch sibling ``.tmp`` too, so a killed run leaves nothing in
+``$TMPDIR`` either; see :func:`staged_output` (and :mod:`.shards` for worker processes, which
+are spawned so that multiprocessing needs no ``pymp-*`` directory).
 
 Finally, files are given the modes a plain ``open()``/``mkdir`` would (``0666``/``0777`` less the
 umask): LeRobot writes videos through ``tempfile`` (mode ``0600``) and moves them into place,

@@ -76,7 +76,7 @@ def rmb_metadata(plan: ConversionPlan) -> dict[str, Any]:
 def write_rmb_metadata(root: Path, plan: ConversionPlan) -> Path:
     path = Path(root) / N.RMB_METADATA_PATH
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(rmb_metadata(plan), indent=2) + "\n")
+    path.write_text(json.dumps(rmb_metadata(plan), indent=2, allow_nan=False) + "\n")
     return path
 
 

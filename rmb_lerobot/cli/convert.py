@@ -91,8 +91,8 @@ def _add_to_lerobot(sub) -> None:
     to.add_argument(
         "--fps",
         help="frame rate of the episodes, e.g. 31.25 or 125/4 (default: from 'time', which must "
-        "then be evenly spaced seconds at 1..1000 Hz; with --fps, problems with 'time' are "
-        "warnings)",
+        "then be regular seconds at 1..1000 Hz, without gaps; with --fps, problems with 'time' "
+        "are only warnings)",
     )
     to.add_argument("--skip", type=int, default=1, help="keep every K-th step, like RMB's --skip")
     to.add_argument(
