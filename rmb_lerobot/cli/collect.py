@@ -4,15 +4,22 @@ from __future__ import annotations
 
 import argparse
 import logging
+import multiprocessing
+import os
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.envs.registry import ENVS, entry_for
 from rmb_lerobot.errors import RmbFormatError
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.collect import CollectConfig
 
 ALL_CAMERAS = ("front", "left", "right", "hand")
 
@@ -22,7 +29,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rmb-collect",
         description=__doc__.splitlines()[0].split(": ", 1)[1],
-        epilog=f"environments: {names} (short names like 'insert' work too)",
+        epilog=f"environments: {names} (short names like 'insert' work too). "
+        "Each episode is built in a hidden temporary in --out and moved into place when "
+        "complete. Ctrl-C or SIGTERM removes the episodes in progress and keeps the complete "
+        "ones (exit status 130 or 143); a second one stops at once. A temporary left by a "
+        "killed run is removed by the next run: its writer holds an flock on a .lock file "
+        "beside it, which the kernel releases when that process ends however it ends, so a "
+        "free lock means stale and a held one means a live run, whose temporaries stay.",
     )
     parser.add_argument("env", help="environment, e.g. MujocoUR5eInsert or insert")
     parser.add_argument("--episodes", type=int, required=True, help="episodes to record")
@@ -55,41 +68,79 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
     from rmb_lerobot.envs.collect import CollectConfig, collect
+    from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
 
-    try:
-        entry_for(args.env)
-        if args.episodes < 1 or args.workers < 1:
-            raise ValueError("--episodes and --workers must be >= 1")
-        if any(not 0 <= w < 6 for w in args.world_idx):
-            raise ValueError(f"--world-idx values must be in 0..5, got {args.world_idx}")
-        config = CollectConfig(
-            env=args.env,
-            out=args.out,
-            episodes=args.episodes,
-            fmt=args.fmt,
-            world_idx=tuple(args.world_idx),
-            cameras=tuple(args.cameras),
-            image_size=(args.image_size[0], args.image_size[1]),
-            depth=not args.no_depth,
-            random_shift=args.random_shift,
-            success_only=args.success_only,
-            seed=args.seed,
-            depth_codec=args.depth_codec,
-            overwrite=args.overwrite,
-            cycle_variants=args.cycle_instructions,
-        )
-        kept = successes = 0
-        with tqdm(total=args.episodes, desc=f"collect {args.env}", unit="episode") as bar:
-            for result in collect(config, workers=args.workers):
-                kept += result.path is not None
-                successes += result.success
-                bar.set_postfix(success=f"{successes}/{bar.n + 1}")
-                bar.update()
-    except (ValueError, RmbFormatError) as exc:
-        print(f"rmb-collect: error: {exc}", file=sys.stderr)
-        return 2
+    with interrupts_raise(on_repeat=lambda signum: _stop_at_once(signum, args.out)):
+        run = None
+        try:
+            entry_for(args.env)
+            if args.episodes < 1 or args.workers < 1:
+                raise ValueError("--episodes and --workers must be >= 1")
+            if any(not 0 <= w < 6 for w in args.world_idx):
+                raise ValueError(f"--world-idx values must be in 0..5, got {args.world_idx}")
+            config = CollectConfig(
+                env=args.env,
+                out=args.out,
+                episodes=args.episodes,
+                fmt=args.fmt,
+                world_idx=tuple(args.world_idx),
+                cameras=tuple(args.cameras),
+                image_size=(args.image_size[0], args.image_size[1]),
+                depth=not args.no_depth,
+                random_shift=args.random_shift,
+                success_only=args.success_only,
+                seed=args.seed,
+                depth_codec=args.depth_codec,
+                overwrite=args.overwrite,
+                cycle_variants=args.cycle_instructions,
+            )
+            kept = successes = 0
+            run = collect(config, workers=args.workers)
+            with tqdm(total=args.episodes, desc=f"collect {args.env}", unit="episode") as bar:
+                for result in run:
+                    kept += result.path is not None
+                    successes += result.success
+                    bar.set_postfix(success=f"{successes}/{bar.n + 1}")
+                    bar.update()
+        except (ValueError, RmbFormatError) as exc:
+            print(f"rmb-collect: error: {exc}", file=sys.stderr)
+            return 2
+        except (Interrupted, KeyboardInterrupt) as exc:
+            signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
+            if run is not None:
+                run.close()  # the signal may have hit the loop body: stop the workers now
+            complete = _complete_episodes(config) if run is not None else 0
+            partial = run.partials_removed if run is not None else 0
+            print(
+                f"rmb-collect: interrupted by {signal.Signals(signum).name}; kept {complete} "
+                f"complete episode{'s' * (complete != 1)} in {args.out}, removed {partial} "
+                f"partial one{'s' * (partial != 1)}",
+                file=sys.stderr,
+            )
+            return 128 + signum
     print(f"kept {kept} episodes ({successes} successful of {args.episodes}) in {args.out}")
     return 0 if kept == args.episodes else 1
+
+
+def _complete_episodes(config: CollectConfig) -> int:
+    """This run's episodes in place (the writer only ever puts complete ones there)."""
+    return sum(
+        config.episode_path(i, config.world_idx[i % len(config.world_idx)]).exists()
+        for i in range(config.episodes)
+    )
+
+
+def _stop_at_once(signum: int, out: Path) -> None:
+    """A second Ctrl-C/SIGTERM: kill the workers and exit without waiting for any clean-up."""
+    for child in multiprocessing.active_children():
+        child.kill()  # their locks die with them: the next run removes their temporaries
+    print(
+        f"rmb-collect: interrupted again; stopped at once. Partial episodes may remain as hidden "
+        f"temporaries in {out}; the next rmb-collect run there removes them",
+        file=sys.stderr,
+        flush=True,
+    )
+    os._exit(128 + signum)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,12 @@
 """rmb-collect: scripted demonstrations recorded as complete RMB episodes."""
 
+import os
+import signal
+
 import numpy as np
 import pytest
 from rmb_lerobot.envs.collect import CollectConfig, collect
+from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
 
 from rmb_lerobot import find_episodes, open_episode
 from rmb_lerobot import keys as K
@@ -68,6 +72,71 @@ def test_an_interrupted_collection_leaves_only_complete_episodes(tmp_path, monke
     with pytest.raises(KeyboardInterrupt):
         list(collect(config))
     assert [p.name for p in tmp_path.iterdir()] == ["MujocoUR5eInsert_world0_000.rmb"]
+
+
+def _signal_at_step(monkeypatch, step: int, signum: int) -> None:
+    """Send ``signum`` to this process from inside the expert, at its ``step``-th call."""
+    from rmb_lerobot.envs.experts.insert import InsertExpert
+
+    calls = {"n": 0}
+    original = InsertExpert.__call__
+
+    def signalling(self, obs):
+        calls["n"] += 1
+        if calls["n"] == step:
+            os.kill(os.getpid(), signum)
+        return original(self, obs)
+
+    monkeypatch.setattr(InsertExpert, "__call__", signalling)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_stops_the_recording_between_two_steps(tmp_path, monkeypatch, signum):
+    _signal_at_step(monkeypatch, 70, signum)  # in the middle of the second episode
+    config = CollectConfig("insert", tmp_path, episodes=3, cameras=("front",), image_size=(32, 32))
+    run = collect(config)
+    with interrupts_raise(), pytest.raises(Interrupted) as info:
+        list(run)
+    assert info.value.signum == signum and info.value.exit_code == 128 + signum
+    assert run.partials_removed == 1
+    assert [p.name for p in tmp_path.iterdir()] == ["MujocoUR5eInsert_world0_000.rmb"]
+
+
+def test_a_signal_while_an_episode_is_committed_keeps_it(tmp_path, monkeypatch):
+    from rmb_lerobot.episode.writer import EpisodeWriter
+
+    original = EpisodeWriter.close
+
+    def close_signalled(self):
+        os.kill(os.getpid(), signal.SIGTERM)  # noted, raised once the episode is in place
+        return original(self)
+
+    monkeypatch.setattr(EpisodeWriter, "close", close_signalled)
+    config = CollectConfig("insert", tmp_path, episodes=3, cameras=("front",), image_size=(32, 32))
+    run = collect(config)
+    with interrupts_raise(), pytest.raises(Interrupted):
+        list(run)
+    assert run.partials_removed == 0
+    (path,) = tmp_path.iterdir()
+    with open_episode(path) as ep:
+        assert ep["reward"][-1] == 1.0 and len(ep["front_rgb_image"]) == len(ep)
+
+
+def test_collect_starts_by_removing_what_ended_runs_left(tmp_path, caplog):
+    from rmb_lerobot.staging import Staging
+
+    dead = Staging(tmp_path / "MujocoUR5eInsert_world0_000.rmb")
+    dead.path.mkdir()
+    os.close(dead._lock_fd)  # what the kernel does when the writer's process dies
+    dead._lock_fd = None
+    with Staging(tmp_path / "other.rmb") as live:
+        live.path.mkdir()
+        config = CollectConfig("insert", tmp_path, episodes=1, cameras=(), image_size=(32, 32))
+        (result,) = collect(config)
+        assert not dead.path.exists() and not dead.lock_path.exists()
+        assert live.path.exists()  # a live parallel run's temporary stays
+    assert dead.path.name in caplog.text
+    assert [p.name for p in tmp_path.iterdir()] == [result.path.name]
 
 
 def test_bad_arguments_are_reported(tmp_path, capsys):
