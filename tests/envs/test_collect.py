@@ -2,6 +2,7 @@
 
 import os
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -137,6 +138,24 @@ def test_collect_starts_by_removing_what_ended_runs_left(tmp_path, caplog):
         assert live.path.exists()  # a live parallel run's temporary stays
     assert dead.path.name in caplog.text
     assert [p.name for p in tmp_path.iterdir()] == [result.path.name]
+
+
+def test_a_worker_killed_mid_episode_leaves_nothing_once_the_pool_is_gone(tmp_path):
+    config = CollectConfig("insert", tmp_path, episodes=20, cameras=("front",), image_size=(32, 32))
+    run = collect(config, workers=2)
+    next(run)
+    deadline = time.monotonic() + 60
+    while not (locks := list(tmp_path.glob(".*.lock"))):
+        assert time.monotonic() < deadline, "no episode was being recorded"
+        time.sleep(0.01)
+    pid = int(locks[0].read_text().split()[1])  # the writer's pid, as Staging notes it
+    os.kill(pid, signal.SIGKILL)  # no clean-up runs in that worker; its lock dies with it
+    run.close()  # terminates the pool, then removes what the killed worker left
+    assert run.partials_removed >= 1
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    for path in tmp_path.iterdir():
+        with open_episode(path) as ep:
+            assert len(ep["front_rgb_image"]) == len(ep) > 10
 
 
 def test_bad_arguments_are_reported(tmp_path, capsys):
