@@ -2,12 +2,12 @@
 
 The writer streams images to their final encoding as steps arrive (video encoders for the
 compact variant, per-frame HDF5 chunks for the single-file variant), so a long episode never
-sits in RAM. Everything is written to a hidden temporary sibling (:class:`~rmb_lerobot.staging.
-Staging`) and moved into place only when :meth:`EpisodeWriter.close` succeeds: an exception,
-Ctrl-C or a crash leaves no episode at the destination, and the temporary of a writer whose
-process died is recognised as stale by :func:`~rmb_lerobot.staging.remove_stale` (its lock is
-free). Temporaries of older versions of this writer carry no lock; see
-:func:`remove_legacy_temporaries`.
+sits in RAM. Everything is written to a hidden temporary sibling
+(:class:`~rmb_lerobot.staging.Staging`) and moved into place only when
+:meth:`EpisodeWriter.close` succeeds: an exception, Ctrl-C or a crash leaves no episode at the
+destination, and the temporary of a writer whose process died is recognised as stale by
+:func:`~rmb_lerobot.staging.remove_stale` (its lock is free). Temporaries of older versions of
+this writer carry no lock; see :func:`remove_legacy_temporaries`.
 """
 
 from __future__ import annotations
