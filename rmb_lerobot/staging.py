@@ -30,6 +30,7 @@ import logging
 import os
 import shutil
 import sys
+import time
 import uuid
 from pathlib import Path
 
@@ -37,6 +38,7 @@ logger = logging.getLogger(__name__)
 
 TMP_MARK = ".tmp-"
 LOCK_SUFFIX = ".lock"
+PRIVATE_LOCK_GRACE_S = 60.0
 
 
 class Staging:
@@ -82,10 +84,12 @@ class Staging:
         self._cleanup()
 
     def _cleanup(self) -> None:
-        for entry in _owned_siblings(self.dest.parent, self.prefix):
-            _remove(entry)
-        with contextlib.suppress(FileNotFoundError):
-            self.lock_path.unlink()  # remove before unlocking: no cleaner can race us
+        left = [e for e in _owned_siblings(self.dest.parent, self.prefix) if not _remove(e)]
+        if left:  # keep the lock file: once we exit, remove_stale sees them and retries
+            logger.warning("could not remove %s", ", ".join(str(e) for e in left))
+        else:
+            with contextlib.suppress(FileNotFoundError):
+                self.lock_path.unlink()  # remove before unlocking: no cleaner can race us
         if self._lock_fd is not None:
             os.close(self._lock_fd)
             self._lock_fd = None
@@ -108,6 +112,7 @@ def remove_stale(directory: str | Path) -> list[Path]:
     removed: list[Path] = []
     if not directory.is_dir():
         return removed
+    removed += _remove_orphan_private_locks(directory)
     for lock in sorted(directory.glob(f".*{TMP_MARK}*{LOCK_SUFFIX}")):
         try:
             fd = os.open(lock, os.O_RDWR)
@@ -121,11 +126,12 @@ def remove_stale(directory: str | Path) -> list[Path]:
             if not _same_file(fd, lock):
                 continue  # removed and possibly recreated meanwhile
             prefix = lock.name.removesuffix(LOCK_SUFFIX)
-            for entry in _owned_siblings(directory, prefix):
-                _remove(entry)
-                removed.append(entry)
-            with contextlib.suppress(FileNotFoundError):
-                lock.unlink()
+            owned = _owned_siblings(directory, prefix)
+            gone = [entry for entry in owned if _remove(entry)]
+            removed += gone
+            if len(gone) == len(owned):
+                with contextlib.suppress(FileNotFoundError):
+                    lock.unlink()
         finally:
             os.close(fd)
     if removed:
@@ -136,6 +142,28 @@ def remove_stale(directory: str | Path) -> list[Path]:
             directory,
             ", ".join(p.name for p in removed),
         )
+    return removed
+
+
+def _remove_orphan_private_locks(directory: Path) -> list[Path]:
+    """Lock files still under their private name: their creator died between creating and
+    renaming them (a signal in that instant). Unlocked and older than a minute means dead:
+    a live creator holds the lock within microseconds of creating the file."""
+    removed = []
+    for private in directory.glob(f".*{TMP_MARK}*{LOCK_SUFFIX}.*"):
+        try:
+            fd = os.open(private, os.O_RDWR)
+        except FileNotFoundError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if time.time() - os.fstat(fd).st_mtime > PRIVATE_LOCK_GRACE_S:
+                private.unlink(missing_ok=True)
+                removed.append(private)
+        except BlockingIOError:
+            pass
+        finally:
+            os.close(fd)
     return removed
 
 
@@ -187,12 +215,18 @@ def _same_file(fd: int, path: Path) -> bool:
     return (st.st_dev, st.st_ino) == (here.st_dev, here.st_ino)
 
 
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        with contextlib.suppress(FileNotFoundError):
+def _remove(path: Path) -> bool:
+    """Remove a file or tree; False if something of it is still there."""
+    try:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
             path.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError as exc:
+        logger.warning("cannot remove %s: %s", path, exc)
+    return not (path.exists() or path.is_symlink())
 
 
 def _exchange(a: Path, b: Path) -> bool:
