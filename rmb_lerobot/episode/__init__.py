@@ -4,7 +4,6 @@ from rmb_lerobot.episode.layout import EpisodeFormat, episode_format
 from rmb_lerobot.episode.reader import Episode, find_episodes, open_episode
 from rmb_lerobot.episode.switch import switch_format
 from rmb_lerobot.episode.timing import control_rate
-from rmb_lerobot.episode.validate import check_float32_range
 from rmb_lerobot.episode.writer import EpisodeWriter, ForwardKinematics
 
 __all__ = [
@@ -12,7 +11,6 @@ __all__ = [
     "EpisodeFormat",
     "EpisodeWriter",
     "ForwardKinematics",
-    "check_float32_range",
     "control_rate",
     "episode_format",
     "find_episodes",

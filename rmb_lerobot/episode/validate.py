@@ -3,8 +3,8 @@
 :func:`read_attrs` and :func:`dataset_names` turn whatever h5py raises on a damaged header into
 :class:`RmbFormatError`; :func:`check_datasets` compares every dataset's dtype and shape with
 the key catalogue (:mod:`rmb_lerobot.keys`) and the robot's layout. None of them reads data,
-so opening an episode stays cheap. :func:`check_finite` and :func:`check_float32_range` check
-values that were read.
+so opening an episode stays cheap. :func:`check_finite` checks values that were read; the
+converter's float32 cast has its own check (:mod:`rmb_lerobot.converters.cast`).
 """
 
 from __future__ import annotations
@@ -23,8 +23,6 @@ from rmb_lerobot.errors import RmbFormatError
 STRING_ATTRS = (K.ATTR_FORMAT, K.ATTR_DEMO_NAME, K.ATTR_TASK_DESC, K.ATTR_VERSION, K.ATTR_ENV)
 # What h5py raises on a damaged header (and on names or values it cannot decode).
 H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError, TypeError, UnicodeError)
-
-_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def _short(value: Any, limit: int = 80) -> str:
@@ -313,30 +311,6 @@ def check_finite(data: np.ndarray, index: Any, length: int, path: Path, key: str
         f"key {key!r} holds {value} at step {step}"
         f"{f' (and {more} more non-finite values in the steps read)' if more else ''}; "
         "RMB data must be finite (pass allow_non_finite=True to keep them)",
-        path=path,
-        key=key,
-    )
-
-
-def check_float32_range(array: np.ndarray, path: str | Path | None, key: str) -> None:
-    """Raise if a finite value would become +-inf when cast to float32 (beyond +-3.4e38).
-
-    For writers and converters that store float64 data as float32: the cast itself is silent.
-    Rows are steps (the first axis); the message names the first such step.
-    """
-    data = np.asarray(array)
-    if data.dtype.kind != "f" or data.dtype.itemsize <= 4:
-        return
-    with np.errstate(invalid="ignore"):
-        over = np.isfinite(data) & (np.abs(data) > _FLOAT32_MAX)
-    if not over.any():
-        return
-    flat = over.reshape(len(data), -1) if data.ndim else over.reshape(1, 1)
-    row = int(np.flatnonzero(flat.any(axis=1))[0])
-    value = (data.reshape(flat.shape)[row])[flat[row]][0]
-    raise RmbFormatError(
-        f"key {key!r} holds {value} at step {row}, beyond float32's range (+-{_FLOAT32_MAX:.4g}):"
-        " stored as float32 it would become inf; expected values within float32's range",
         path=path,
         key=key,
     )
