@@ -121,6 +121,11 @@ def test_cloth_is_a_pinned_2d_flex_of_rmbs_grid(cloth_env):
     )
     is_flex_eq = model.eq_type == mujoco.mjtEq.mjEQ_FLEX
     assert is_flex_eq.sum() == 1 and model.eq_obj1id[is_flex_eq][0] == flex  # inextensible
+    points = [model.body(f"{CLOTH}_{i}").id for i in range(NUM_POINTS)]
+    assert model.body_mass[points].sum() == pytest.approx(2.1)  # RMB's cloth weight
+    pads = model.geom_priority[model.geom("gripper/right_pad1").id]
+    assert model.flex_priority[flex] > pads  # the cloth's contact softness, also against pads
+    assert model.opt.solver == mujoco.mjtSolver.mjSOL_CG  # MuJoCo 4.0.0's Newton can diverge
 
 
 @pytest.mark.parametrize("world_idx", [0, 5])
@@ -163,23 +168,39 @@ def _edge_lengths(env: RmbEnv) -> np.ndarray:
     return np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
 
 
-def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
-    env = make_env(ClothTask())
-    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+# (seed, world) of the random-action rollouts. Any one of them is chaotic (MuJoCo's last bits
+# differ between CPUs, and a different trajectory hits the cloth differently), so the bounds
+# hold for every rollout with margin: over 120 rollouts like these (seeds 0..19 x worlds
+# 0..5, 400 steps; benchmarks/RESULTS.md, cloth) the worst edge reached 1.66x (max), 1.13x
+# (90th percentile of a rollout) and 1.17x (after going home), points at most 9.5 m/s.
+RANDOM_ROLLOUTS = [(0, 0), (1, 5), (2, 1), (3, 4), (4, 2), (5, 3)]
+RANDOM_STEPS = 400
+MAX_STRETCH = 2.0  # worst edge at any step: squeezed or whipped for a moment, never far
+MAX_POINT_SPEED = 25.0  # m/s: the arm's tool reaches ~11 m/s here; a launched point goes 100+
+
+
+@pytest.mark.parametrize(("seed", "world_idx"), RANDOM_ROLLOUTS)
+def test_random_actions_keep_the_simulation_stable(cloth_env, random_actions, seed, world_idx):
+    env = cloth_env
+    env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     rest = _edge_lengths(env)
     first_free = env.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
     cloth_dofs = slice(first_free, first_free + 3 * (NUM_POINTS - CLOTH_COLUMNS))
     fastest, stretch = 0.0, []
-    for _ in random_actions(env):
+    for _ in random_actions(env, steps=RANDOM_STEPS, seed=seed):
         fastest = max(fastest, float(np.abs(env.data.qvel[cloth_dofs]).max()))
         stretch.append(float((_edge_lengths(env) / rest).max()))
+    for _ in range(30):  # the arm goes home: whatever it left the cloth in, edges spring back
+        env.step(env.home_command)
+    settled = float((_edge_lengths(env) / rest).max())
     board = env.data.geom(BOARD).xpos.copy()
     top_row = env.task.cloth_points(env.model, env.data)[:CLOTH_COLUMNS]
-    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    assert fastest < MAX_POINT_SPEED
     # Random joint targets slam the arm into the cloth and the board at full speed: an edge
-    # squeezed between them stretches for a moment, but never far, and springs back.
-    assert max(stretch) < 2.5
-    assert np.percentile(stretch, 90) < 1.1 and stretch[-1] < 1.1
+    # squeezed between them, or whipped, stretches for a moment, but never far.
+    assert max(stretch) < MAX_STRETCH
+    assert np.percentile(stretch, 90) < 1.2  # the heavy cloth pressed against the board
+    assert settled < 1.25
     assert np.linalg.norm(top_row - board, axis=1).max() < 0.25  # still hanging from the board
 
 
