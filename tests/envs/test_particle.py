@@ -132,18 +132,26 @@ def test_resting_particles_stay_put_and_fall_asleep(particle_env):
     assert np.all(data.tree_asleep[particle_trees] >= 0)  # out of the solver until touched
 
 
-def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
-    env = make_env(ParticleTask())
-    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+# (seed, world) of the random-action rollouts: the invariants must hold for each (one chaotic
+# trajectory differs between CPUs). The arm's tool reaches ~11 m/s under random joint targets,
+# so a swatted particle may fly fast; a numerically launched one goes 100+ m/s.
+RANDOM_ROLLOUTS = [(0, 0), (1, 3), (2, 5), (3, 1)]
+MAX_SPEED = 25.0  # m/s
+
+
+@pytest.mark.parametrize(("seed", "world_idx"), RANDOM_ROLLOUTS)
+def test_random_actions_keep_the_simulation_stable(particle_env, random_actions, seed, world_idx):
+    env = particle_env
+    env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     model = env.model
     bodies = [model.body(f"{PARTICLE}_{i}") for i in range(30)] + [model.body(SCOOP)]
     # The particles' slide joints and the scoop's linear velocity (the first three).
     linear = np.concatenate([model.jnt_dofadr[b.jntadr[0]] + np.arange(3) for b in bodies])
     fastest = 0.0
-    for _ in random_actions(env):
+    for _ in random_actions(env, steps=300, seed=seed):
         fastest = max(fastest, float(np.abs(env.data.qvel[linear]).max()))
     particles = env.task.particle_positions(model, env.data)
-    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    assert fastest < MAX_SPEED
     assert np.all(np.abs(particles[:, :2]) < 2.0)  # still near the table (or on the floor)
     assert np.all(particles[:, 2] > PARTICLE_RADIUS - 0.005)  # none fell through anything
 

@@ -147,16 +147,23 @@ def test_a_crowded_layout_is_not_clear():
     assert best_grasp_yaw(0, positions) is None
 
 
-def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
-    env = make_env(PickTask())
-    env.reset(seed=0, options={"random_shift": 0.03})
+# (seed, world) of the random-action rollouts: the invariants must hold for each (one chaotic
+# trajectory differs between CPUs). The arm's tool reaches ~11 m/s under random joint targets.
+RANDOM_ROLLOUTS = [(0, 0), (1, 3), (2, 5), (3, 1)]
+MAX_SPEED = 25.0  # m/s: a swatted object may fly fast; a numerically launched one goes 100+
+
+
+@pytest.mark.parametrize(("seed", "world_idx"), RANDOM_ROLLOUTS)
+def test_random_actions_keep_the_simulation_stable(pick_env, random_actions, seed, world_idx):
+    env = pick_env
+    env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     fastest = 0.0
-    for _ in random_actions(env):
+    for _ in random_actions(env, steps=300, seed=seed):
         speeds = [np.linalg.norm(env.data.joint(o.body).qvel[:3]) for o in OBJECTS]
         fastest = max(fastest, *speeds)
     heights = [env.data.body(o.body).xpos[2] for o in OBJECTS]
     # Swatted about by the arm (a bottle knocked onto the floor may roll far), never launched.
-    assert fastest < 10.0
+    assert fastest < MAX_SPEED
     assert min(heights) > -0.005  # nothing sank into the table or the floor
 
 

@@ -134,9 +134,17 @@ def test_start_pose_is_rmbs(ring_env):
     assert obs["agent_pos"][:6] == pytest.approx(RingTask.home_arm_qpos, abs=1e-6)
 
 
-def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
-    env = make_env(RingTask())
-    env.reset(seed=0, options={"world_idx": 0, "random_shift": 0.03})
+# (seed, world) of the random-action rollouts: the invariants must hold for each (one chaotic
+# trajectory differs between CPUs). The arm's tool reaches ~11 m/s under random joint targets,
+# so a knocked ring may fly off fast; a numerically launched one goes 100+ m/s.
+RANDOM_ROLLOUTS = [(0, 0), (1, 3), (2, 5), (3, 1)]
+MAX_SPEED = 25.0  # m/s
+
+
+@pytest.mark.parametrize(("seed", "world_idx"), RANDOM_ROLLOUTS)
+def test_random_actions_keep_the_simulation_stable(ring_env, random_actions, seed, world_idx):
+    env = ring_env
+    env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     slide = np.concatenate(
         [
             env.model.jnt_dofadr[env.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
@@ -144,10 +152,10 @@ def test_random_actions_keep_the_simulation_stable(make_env, random_actions):
         ]
     )
     fastest = 0.0
-    for _ in random_actions(env):
+    for _ in random_actions(env, steps=300, seed=seed):
         fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
     points = env.task.ring_points(env.model, env.data)
-    assert fastest < 10.0  # m/s: the arm swings at a few m/s at most
+    assert fastest < MAX_SPEED
     closed = np.vstack([points, points[:1]])
     edges = np.linalg.norm(np.diff(closed, axis=0), axis=1)
     assert edges == pytest.approx(SEGMENT_LENGTH, rel=0.1)  # inextensible, seam closed
