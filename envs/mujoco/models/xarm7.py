@@ -1,0 +1,141 @@
+"""RMB's MuJoCo xArm7: example-robot-data's xArm7 arm + the xArm gripper rebuilt in code.
+
+Sources (RMB = RoboManipBaselines commit 8535948, paths under
+``robo_manip_baselines/envs/``):
+
+- arm: example-robot-data ``xarm_description/urdf/xarm7.urdf`` (UFACTORY xarm_ros2,
+  BSD-3-Clause). Its link meshes are byte-identical to RMB's ``link_base``, ``link1..7``
+  (RMB draws ``end_tool.stl`` on link7 instead of ``link7.stl``); its kinematics, inertials,
+  joint ranges, damping (10/10/5/5/5/2/2) and friction loss (1) are RMB's
+  ``assets/mujoco/robots/xarm7/xarm7_body.xml`` / ``xarm7_config.xml``'s;
+- gripper: :mod:`~rmb_lerobot.envs.mujoco.models.xarm_gripper` (RMB's mechanism and command);
+- actuators: ``xarm7_config.xml`` lines 36-47 and 92-98 (classes size1/2/3);
+- hand camera: ``xarm7_body.xml`` lines 104-108 (RMB's D435 mount drawn as boxes);
+- F/T site: ``xarm7_body.xml`` lines 44-45 (on the gripper base, rotated 90 deg about z);
+- mount: ``assets/mujoco/envs/xarm7/env_xarm7_cable.xml`` line 36: ``xarm7_root_frame`` at
+  (-0.22, 0, 0.74), on RMB's xArm table whose top is at z 0.74 (line 29: 0.721 + 0.019);
+- home: ``mujoco/xarm7/MujocoXarm7CableEnv.py`` line 20 (also PushT's); gripper open (0).
+
+Load-time fixes of the URDF: see :func:`~rmb_lerobot.envs.mujoco.models.common.load_erd_urdf`;
+the colliding link meshes get render-only twins so that the visual mesh simplification applies.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR, simplify_visual_meshes
+from rmb_lerobot.envs.mujoco.models import xarm_gripper
+from rmb_lerobot.envs.mujoco.models.common import (
+    ArmModel,
+    RobotModel,
+    Vec3,
+    add_ft_sensor,
+    add_render_twins,
+    add_servo,
+    euler_quat,
+    load_erd_urdf,
+    mount,
+)
+from rmb_lerobot.envs.mujoco.robot import HAND_CAMERA
+
+URDF = "xarm_description/urdf/xarm7.urdf"
+ROOT_BODY = "xarm7_root_frame"
+BASE_BODY = "link_base"
+EEF_SITE = "eef"
+FT_SITE = "ft_site"
+JOINTS = tuple(f"joint{i}" for i in range(1, 8))
+ACTUATORS = tuple(f"act{i}" for i in range(1, 8))
+HOME = (0.0, 0.0, 0.0, 0.8, 0.0, 0.8, 0.0)
+RMB_MOUNT_POS: Vec3 = (-0.22, 0.0, 0.74)
+RMB_TABLE_TOP_Z = 0.74
+# xarm7_config.xml lines 36-46: (kp, kv, |force|) of classes size1 (joints 1-2), size2 (3-5),
+# size3 (6-7); ctrlrange = the joint range (lines 35, 93-97).
+_GAINS = ((1500, 150, 50),) * 2 + ((1000, 100, 30),) * 3 + ((800, 80, 20),) * 2
+# xarm7_body.xml line 43: the gripper base is link7 turned by pi about z.
+_GRIPPER_MOUNT_QUAT = (0.0, 0.0, 0.0, 1.0)
+_WHITE, _GRAY = (1.0, 1.0, 1.0, 1.0), (0.753, 0.753, 0.753, 1.0)  # xarm7_config.xml lines 7-8
+
+
+def _add_hand_camera(spec: mujoco.MjSpec) -> None:
+    """RMB's ``hand_camera_link`` on link7 (xarm7_body.xml lines 104-108). Its D435 + stand
+    mesh (RMB's own) is drawn as boxes sized from the collision mesh's extents (measured:
+    camera x 0.055..0.080, y -0.0455..0.0455, z 0..0.028; plate z 0..0.003). The visual
+    camera box stops below the lens (z 0.0237) so the camera never sees its own housing."""
+    body = spec.body("link7").add_body(name="hand_camera_link")
+    box = mujoco.mjtGeom.mjGEOM_BOX
+    visual = {"contype": 0, "conaffinity": 0, "group": 2, "rgba": list(_GRAY)}
+    body.add_geom(type=box, size=[0.0125, 0.0455, 0.0115], pos=[0.0675, 0, 0.0115], **visual)
+    body.add_geom(type=box, size=[0.051, 0.0375, 0.0015], pos=[0.013, 0, 0.0015], **visual)
+    body.add_geom(type=box, size=[0.0125, 0.0455, 0.014], pos=[0.0675, 0, 0.014], group=3)
+    body.add_camera(
+        name=HAND_CAMERA,
+        pos=[0.06746, 0.0, 0.0237],
+        quat=euler_quat((0.0, 3.1415, 1.5708)),  # RMB's numbers (3.1415, not pi)
+        fovy=62.0,
+    )
+
+
+def build_xarm7(
+    *,
+    mount_pos: Vec3 = RMB_MOUNT_POS,
+    visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
+    mesh_cache: Path | bool | None = True,
+) -> RobotModel:
+    """xArm7 + xArm gripper + wrist F/T sensor + ``hand`` camera, base at ``mount_pos``.
+
+    RMB stands the arm on its table, 0.22 m behind the table centre: on a table whose top is
+    at ``z``, pass ``(-0.22, 0, z)``. ``visual_mesh_error`` / ``mesh_cache``: as
+    :func:`~rmb_lerobot.envs.mujoco.robot.build_robot_spec`.
+    """
+    spec, urdf = load_erd_urdf(URDF)
+    spec.modelname = "xarm7"
+    # Twins first, always: the simplified-mesh cache is keyed by the URDF, not by spec edits.
+    add_render_twins(spec, rgba=_WHITE)
+    for geom in spec.body("link7").geoms:
+        if geom.group == 2:
+            geom.rgba = list(_GRAY)  # RMB's end tool is gray
+    simplify_visual_meshes(spec, urdf, visual_mesh_error, cache=mesh_cache)
+    spec.option.timestep = 0.004  # env_xarm7_common.xml line 3
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.compiler.autolimits = True
+
+    for joint, actuator, (kp, kv, force) in zip(JOINTS, ACTUATORS, _GAINS, strict=True):
+        add_servo(
+            spec,
+            actuator,
+            joint,
+            kp=kp,
+            kv=kv,
+            ctrl_range=tuple(spec.joint(joint).range),
+            force_range=(-force, force),
+        )
+    link7 = spec.body("link7")
+    link7.add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)  # RMB's IK frame: joint 7's
+    xarm_gripper.add_xarm_gripper(spec, link7, quat=_GRIPPER_MOUNT_QUAT)
+    force, torque = add_ft_sensor(
+        spec, xarm_gripper.ROOT_BODY, FT_SITE, quat=tuple(euler_quat((0.0, 0.0, 1.5708)))
+    )
+    _add_hand_camera(spec)
+    mount(spec, BASE_BODY, ROOT_BODY, mount_pos)
+
+    arm = ArmModel(
+        arm_joints=JOINTS,
+        arm_actuators=ACTUATORS,
+        gripper_actuator=xarm_gripper.ACTUATOR,
+        gripper_joints=xarm_gripper.JOINTS,
+        gripper_scale=xarm_gripper.SCALE,
+        gripper_ctrl_range=xarm_gripper.CTRL_RANGE,
+        home_arm_qpos=HOME,
+        home_gripper=0.0,
+        root_body=ROOT_BODY,
+        base_body=BASE_BODY,
+        eef_site=EEF_SITE,
+        tcp_site=xarm_gripper.TCP_SITE,
+        ft_site=FT_SITE,
+        force_sensor=force,
+        torque_sensor=torque,
+        hand_camera=HAND_CAMERA,
+    )
+    return RobotModel("xarm7", spec, (arm,), {HAND_CAMERA: HAND_CAMERA}, stand=None)
