@@ -25,7 +25,7 @@ from rmb_lerobot.converters.attrs import checked_attrs
 from rmb_lerobot.converters.cast import to_float32
 from rmb_lerobot.converters.rate import nominal_rate, same_rate
 from rmb_lerobot.converters.schema import DatasetSchema, build_schema
-from rmb_lerobot.envs.registry import ROBOTS
+from rmb_lerobot.envs.registry import robot_for_env_attr
 
 from rmb_lerobot import keys as K
 from rmb_lerobot.episode import Episode, open_episode
@@ -96,12 +96,11 @@ def open_source(path: str | Path, allow_non_finite: bool = False) -> Episode:
 
 
 def robot_type_of(env: str) -> str:
-    """LeRobot's ``robot_type`` for an RMB env name: the robot short name when known."""
-    lowered = env.lower()
-    for short, spelled in ROBOTS.items():
-        if spelled.lower() in lowered:
-            return short
-    return env
+    """LeRobot's ``robot_type`` for an episode's ``env`` attribute: the robot's short name
+    (``ur5e``) when the env registry or the robot records know the attribute exactly
+    (:func:`~rmb_lerobot.envs.registry.robot_for_env_attr`), else the attribute itself."""
+    robot = robot_for_env_attr(env)
+    return robot.name if robot is not None else env
 
 
 def _require(episode: Episode, key: str, option: str) -> None:

@@ -50,7 +50,7 @@ class CollectConfig:
     episodes: int
     fmt: str = "rmb"
     world_idx: tuple[int, ...] = tuple(range(NUM_WORLDS))
-    cameras: tuple[str, ...] = ("front", "left", "right", "hand")
+    cameras: tuple[str, ...] | None = None  # None: every camera of the env (entry.cameras)
     image_size: tuple[int, int] = (640, 480)
     depth: bool = True
     random_shift: float = 0.0

@@ -1,43 +1,87 @@
-"""The one table of RMB environments, and every name derived from it.
+"""The one table of environments, and every name derived from it.
 
-Each entry names a task (``insert``) on a robot (``ur5e``); from that come RMB's environment
-name (``MujocoUR5eInsert``), the gymnasium id (``rmb_lerobot/MujocoUR5eInsert-v0``) and the
-LeRobot env type (``rmb_ur5e_insert``). Nothing here imports MuJoCo: ``import rmb_lerobot``
-registers the gymnasium ids through this table cheaply, and the task classes are imported only
-when an env is made.
+Each entry is a task (``insert``) on a robot (``ur5e``) in a simulator (``mujoco``). From the
+robot record (:mod:`rmb_lerobot.envs.robots`), the simulator and the task name come RMB's
+environment name (``MujocoUR5eInsert``), the ``env`` attribute RMB writes into episodes
+(``MujocoUR5eInsertEnv``), the gymnasium id (``rmb_lerobot/MujocoUR5eInsert-v0``), the LeRobot
+env type (``rmb_ur5e_insert``), the ``robot_type`` of converted datasets (``ur5e``) and the
+camera names. Nothing here imports a simulator: ``import rmb_lerobot`` registers the gymnasium
+ids through this table cheaply, and the task classes are imported only when an env is made.
+
+Short task names (``insert``) name the task on RMB's UR5e in MuJoCo, as they always have; other
+robots' entries are named ``<robot>_<task>`` (``xarm7_cable``).
 """
 
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
+from rmb_lerobot.envs.robots import ROBOTS, Robot
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 GYM_NAMESPACE = "rmb_lerobot"
 GYM_VERSION = "v0"
 LEROBOT_TYPE_PREFIX = "rmb_"
+DEFAULT_ROBOT = "ur5e"  # the robot a bare task name means (RMB's own default)
 
-# Robot short name -> how RMB spells it in environment class names.
-ROBOTS = {"ur5e": "UR5e"}
+
+@dataclass(frozen=True)
+class Simulator:
+    """A simulator (or real hardware): its RMB spelling and its part in LeRobot type names."""
+
+    name: str
+    rmb_name: str  # RMB's prefix of environment names, e.g. "Mujoco"
+    type_prefix: str  # inserted after "rmb_" in LeRobot types ("" for MuJoCo, RMB's default)
+
+
+SIMULATORS: dict[str, Simulator] = {sim.name: sim for sim in (Simulator("mujoco", "Mujoco", ""),)}
+
+
+def _camel(name: str) -> str:
+    return "".join(part.capitalize() for part in name.split("_"))
 
 
 @dataclass(frozen=True)
 class EnvEntry:
-    """One RMB environment: a task on a robot in a simulator."""
+    """One environment: a task on a robot in a simulator, in a workspace."""
 
+    simulator: str  # key of SIMULATORS, e.g. "mujoco"
+    robot: str  # key of rmb_lerobot.envs.robots.ROBOTS, e.g. "ur5e"
     task: str  # short task name, e.g. "cabinet_hinge"
     task_class: str  # "module:Class" of the Task
     expert_class: str  # "module:Class" of its scripted expert
-    robot: str = "ur5e"
-    simulator: str = "Mujoco"
+    workspace: Workspace = field(default=RMB_TABLE)
+
+    def __post_init__(self) -> None:
+        if self.simulator not in SIMULATORS:
+            raise ValueError(f"unknown simulator {self.simulator!r}; known: {sorted(SIMULATORS)}")
+        if self.robot not in ROBOTS:
+            raise ValueError(f"unknown robot {self.robot!r}; known: {sorted(ROBOTS)}")
+
+    @property
+    def robot_record(self) -> Robot:
+        return ROBOTS[self.robot]
+
+    @property
+    def name(self) -> str:
+        """The short name: the task for RMB's UR5e in MuJoCo, else ``[simulator_]robot_task``."""
+        if self.simulator == "mujoco" and self.robot == DEFAULT_ROBOT:
+            return self.task
+        return self.lerobot_type.removeprefix(LEROBOT_TYPE_PREFIX)
 
     @property
     def rmb_env_name(self) -> str:
-        """RMB's environment class name without the ``Env`` suffix."""
-        camel = "".join(part.capitalize() for part in self.task.split("_"))
-        return f"{self.simulator}{ROBOTS[self.robot]}{camel}"
+        """RMB's environment class name without the ``Env`` suffix, e.g. ``MujocoUR5eInsert``."""
+        sim = SIMULATORS[self.simulator]
+        return f"{sim.rmb_name}{self.robot_record.rmb_name}{_camel(self.task)}"
+
+    @property
+    def env_attr(self) -> str:
+        """The ``env`` attribute of recorded episodes (RMB's gymnasium spec name)."""
+        return f"{self.rmb_env_name}Env"
 
     @property
     def gym_id(self) -> str:
@@ -45,7 +89,18 @@ class EnvEntry:
 
     @property
     def lerobot_type(self) -> str:
-        return f"{LEROBOT_TYPE_PREFIX}{self.robot}_{self.task}"
+        sim = SIMULATORS[self.simulator]
+        return f"{LEROBOT_TYPE_PREFIX}{sim.type_prefix}{self.robot}_{self.task}"
+
+    @property
+    def robot_type(self) -> str:
+        """LeRobot's ``robot_type`` of datasets recorded in this env."""
+        return self.robot
+
+    @property
+    def cameras(self) -> tuple[str, ...]:
+        """Every camera of the env: the workspace's fixed ones, then the robot's."""
+        return (*self.workspace.camera_names, *self.robot_record.cameras)
 
     def load_task_class(self) -> type:
         return _load(self.task_class)
@@ -59,14 +114,20 @@ def _load(target: str) -> Any:
     return getattr(importlib.import_module(module), name)
 
 
-def _entry(task: str, task_class: str, expert_class: str) -> EnvEntry:
+def _entry(task: str, task_class: str, expert_class: str, robot: str = "ur5e") -> EnvEntry:
     tasks, experts = "rmb_lerobot.envs.tasks", "rmb_lerobot.envs.experts"
     module = task.split("_")[0]  # cabinet_hinge and cabinet_slide share a module
-    return EnvEntry(task, f"{tasks}.{module}:{task_class}", f"{experts}.{module}:{expert_class}")
+    return EnvEntry(
+        "mujoco",
+        robot,
+        task,
+        f"{tasks}.{module}:{task_class}",
+        f"{experts}.{module}:{expert_class}",
+    )
 
 
 ENVS: dict[str, EnvEntry] = {
-    entry.task: entry
+    entry.name: entry
     for entry in (
         _entry("cabinet_hinge", "CabinetHingeTask", "CabinetHingeExpert"),
         _entry("cabinet_slide", "CabinetSlideTask", "CabinetSlideExpert"),
@@ -80,20 +141,44 @@ ENVS: dict[str, EnvEntry] = {
         _entry("toolbox", "ToolboxTask", "ToolboxExpert"),
     )
 }
-"""Every environment by short task name: the source of truth for all env names."""
+"""Every environment by short name (:attr:`EnvEntry.name`): the source of truth for names."""
 
 
 def entry_for(name: str) -> EnvEntry:
-    """Look an env up by short task name, RMB env name, gymnasium id or LeRobot type."""
+    """Look an env up by short name, RMB env name (with or without ``Env``), gymnasium id or
+    LeRobot type."""
     for entry in ENVS.values():
-        if name in (entry.task, entry.rmb_env_name, entry.gym_id, entry.lerobot_type):
+        if name in (entry.name, entry.rmb_env_name, entry.env_attr, entry.gym_id):
+            return entry
+        if name == entry.lerobot_type:
             return entry
     known = ", ".join(sorted(e.rmb_env_name for e in ENVS.values()))
     raise ValueError(f"unknown RMB environment {name!r}; known: {known}")
 
 
+def entry_for_env_attr(env: object) -> EnvEntry | None:
+    """The entry whose episodes carry this ``env`` attribute, matched exactly; else None."""
+    if not isinstance(env, str):
+        return None
+    return next((e for e in ENVS.values() if e.env_attr == env), None)
+
+
+def robot_for_env_attr(env: object) -> Robot | None:
+    """The robot of an episode's ``env`` attribute, matched exactly: our envs' attributes
+    (:attr:`EnvEntry.env_attr`) and the original RMB's (:attr:`Robot.rmb_envs`); else None.
+
+    Never by substring: ``MujocoUR5eDualCableEnv`` is a dual-arm robot, not a UR5e.
+    """
+    if not isinstance(env, str):
+        return None
+    entry = entry_for_env_attr(env)
+    if entry is not None:
+        return entry.robot_record
+    return next((r for r in ROBOTS.values() if env in r.rmb_envs), None)
+
+
 def make_env(task: str, max_episode_steps: int | None = None, **kwargs: Any) -> gym.Env:
-    """gymnasium entry point: the task's :class:`RmbEnv` inside a ``TimeLimit``.
+    """gymnasium entry point: the entry's :class:`RmbEnv` inside a ``TimeLimit``.
 
     The time limit comes from the task (``Task.max_episode_steps``) unless given, so the table
     need not import the task to register it.
@@ -114,7 +199,7 @@ def register_gym_envs() -> list[str]:
             gym.register(
                 id=entry.gym_id,
                 entry_point=f"{__name__}:make_env",
-                kwargs={"task": entry.task},
+                kwargs={"task": entry.name},
                 disable_env_checker=True,
             )
         ids.append(entry.gym_id)

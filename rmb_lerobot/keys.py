@@ -82,45 +82,19 @@ class RobotLayout:
 
 UR5E_LAYOUT = RobotLayout(num_joints=7)
 
-# ``env`` attributes of the original RMB's single-arm UR5e environments (gymnasium spec names,
-# as its recorder writes them). All store 6 arm joints + 1 gripper value.
-ORIGINAL_UR5E_ENVS = frozenset(
-    {
-        "MujocoUR5eCableEnv",
-        "MujocoUR5eRingEnv",
-        "MujocoUR5eParticleEnv",
-        "MujocoUR5eClothEnv",
-        "MujocoUR5eInsertEnv",
-        "MujocoUR5eDoorEnv",
-        "MujocoUR5eCabinetEnv",
-        "MujocoUR5eToolboxEnv",
-        "MujocoUR5ePickEnv",
-        "IsaacUR5eChainEnv",
-        "IsaacUR5eCabinetEnv",
-        "RealUR5eDemoEnv",
-    }
-)
-# Robot short names of the env registry (``EnvEntry.robot``) -> layout.
-ROBOT_LAYOUTS = {"ur5e": UR5E_LAYOUT}
-
 
 def layout_for_env(env: object) -> RobotLayout | None:
     """The layout of the robot an episode's ``env`` attribute names, or None if unknown.
 
-    Names match exactly (``MujocoUR5eDualCableEnv`` is two arms, not a UR5e): the original
-    RMB's UR5e envs, and ours as the env registry names them (``rmb_env_name + "Env"``, what
-    our envs write). The one place that maps env names to robots.
+    Names match exactly (``MujocoUR5eDualCableEnv`` is two arms, not a UR5e): the env
+    registry's attributes and the original RMB's env names its robot records list (see
+    :func:`rmb_lerobot.envs.registry.robot_for_env_attr`, the one place that maps env names to
+    robots).
     """
-    if not isinstance(env, str):
-        return None
-    if env in ORIGINAL_UR5E_ENVS:
-        return UR5E_LAYOUT
-    from rmb_lerobot.envs.registry import ENVS  # imported with rmb_lerobot anyway
+    from rmb_lerobot.envs.registry import robot_for_env_attr  # imported with rmb_lerobot anyway
 
-    for entry in ENVS.values():
-        if env == f"{entry.rmb_env_name}Env":
-            return ROBOT_LAYOUTS.get(entry.robot)
-    return None
+    robot = robot_for_env_attr(env)
+    return robot.layout if robot is not None else None
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,6 @@ from rmb_lerobot.errors import RmbFormatError
 if TYPE_CHECKING:
     from rmb_lerobot.envs.collect import CollectConfig
 
-ALL_CAMERAS = ("front", "left", "right", "hand")
-
 
 def build_parser() -> argparse.ArgumentParser:
     names = ", ".join(sorted(e.rmb_env_name for e in ENVS.values()))
@@ -44,7 +42,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--world-idx", type=int, nargs="+", default=list(range(6)), help="worlds to cycle through"
     )
-    parser.add_argument("--cameras", nargs="*", default=list(ALL_CAMERAS), choices=ALL_CAMERAS)
+    parser.add_argument(
+        "--cameras",
+        nargs="*",
+        default=None,
+        help="cameras to record, any of the env's (its scene's fixed cameras and its robot's, "
+        "e.g. front left right hand for the UR5e envs; default: all of them); none: no images",
+    )
     parser.add_argument("--image-size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
     parser.add_argument("--no-depth", action="store_true", help="record RGB only")
     parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
@@ -73,7 +77,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     with interrupts_raise(on_repeat=lambda signum: _stop_at_once(signum, args.out)):
         run = None
         try:
-            entry_for(args.env)
+            entry = entry_for(args.env)
+            cameras = entry.cameras if args.cameras is None else tuple(args.cameras)
+            unknown = [c for c in cameras if c not in entry.cameras]
+            if unknown:
+                raise ValueError(
+                    f"--cameras {' '.join(unknown)}: not a camera of {entry.rmb_env_name}; "
+                    f"its cameras are {' '.join(entry.cameras)}"
+                )
             if args.episodes < 1 or args.workers < 1:
                 raise ValueError("--episodes and --workers must be >= 1")
             if any(not 0 <= w < 6 for w in args.world_idx):
@@ -84,7 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 episodes=args.episodes,
                 fmt=args.fmt,
                 world_idx=tuple(args.world_idx),
-                cameras=tuple(args.cameras),
+                cameras=cameras,
                 image_size=(args.image_size[0], args.image_size[1]),
                 depth=not args.no_depth,
                 random_shift=args.random_shift,

@@ -46,6 +46,15 @@ def test_collected_episodes_carry_everything_rmb_records(tmp_path, capsys):
     assert "kept 2 episodes (2 successful of 2)" in capsys.readouterr().out
 
 
+def test_camera_choices_come_from_the_env(tmp_path, capsys):
+    """The cameras a run may ask for are the env's: its scene's and its robot's."""
+    code = main(["insert", "--episodes", "1", "--out", str(tmp_path), "--cameras", "front", "top"])
+    assert code == 2 and not list(tmp_path.iterdir())
+    err = capsys.readouterr().err
+    assert "--cameras top: not a camera of MujocoUR5eInsert" in err
+    assert "its cameras are front left right hand" in err
+
+
 def test_parallel_workers_and_single_file_format(tmp_path):
     config = CollectConfig("door", tmp_path, episodes=2, fmt="hdf5", cameras=(), depth=False)
     results = sorted(collect(config, workers=2), key=lambda r: r.index)

@@ -1,18 +1,59 @@
 """The env table: every name (RMB, gymnasium, LeRobot) derives from one entry."""
 
+import dataclasses
+
 import gymnasium as gym
 import pytest
+from rmb_lerobot.converters.plan import robot_type_of
+from rmb_lerobot.envs import registry
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
-from rmb_lerobot.envs.registry import ENVS, entry_for
+from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, robot_for_env_attr
+from rmb_lerobot.envs.robots import UR5E
 
 import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
+from rmb_lerobot import keys as K
 
 
 def test_names_follow_rmb_and_the_issue():
     insert = ENVS["insert"]
     assert insert.rmb_env_name == "MujocoUR5eInsert"
+    assert insert.env_attr == "MujocoUR5eInsertEnv"  # what RMB's recorder writes
     assert insert.gym_id == "rmb_lerobot/MujocoUR5eInsert-v0"
     assert insert.lerobot_type == "rmb_ur5e_insert"
+    assert insert.robot_type == "ur5e"
+    assert insert.cameras == ("front", "left", "right", "hand")
+
+
+def test_every_name_derives_from_the_robot_record_and_the_task():
+    """Another robot's entry: names from its record, short name prefixed by the robot."""
+    xarm7 = dataclasses.replace(UR5E, name="xarm7", rmb_name="Xarm7")
+    entry = EnvEntry("mujoco", "ur5e", "cable", "m:Task", "m:Expert")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setitem(registry.ROBOTS, "xarm7", xarm7)
+        entry = dataclasses.replace(entry, robot="xarm7")
+        assert entry.name == "xarm7_cable"
+        assert entry.rmb_env_name == "MujocoXarm7Cable"
+        assert entry.gym_id == "rmb_lerobot/MujocoXarm7Cable-v0"
+        assert entry.lerobot_type == "rmb_xarm7_cable" and entry.robot_type == "xarm7"
+    with pytest.raises(ValueError, match="unknown robot 'kuka'"):
+        EnvEntry("mujoco", "kuka", "cable", "m:Task", "m:Expert")
+    with pytest.raises(ValueError, match="unknown simulator 'gazebo'"):
+        EnvEntry("gazebo", "ur5e", "cable", "m:Task", "m:Expert")
+
+
+def test_env_attributes_map_to_robots_exactly_never_by_substring():
+    for entry in ENVS.values():
+        assert robot_for_env_attr(entry.env_attr) is UR5E
+        assert K.layout_for_env(entry.env_attr) == UR5E.layout == K.UR5E_LAYOUT
+        assert robot_type_of(entry.env_attr) == "ur5e"
+    # The original RMB's UR5e envs that the registry does not derive.
+    for env in ("MujocoUR5eCabinetEnv", "RealUR5eDemoEnv", "IsaacUR5eChainEnv"):
+        assert robot_for_env_attr(env) is UR5E and robot_type_of(env) == "ur5e"
+    # Lookalikes are not UR5e envs: a dual-arm robot, a name without "Env", other cases.
+    for env in ("MujocoUR5eDualCableEnv", "MujocoUR5eCable", "mujocour5ecableenv", "UR5e"):
+        assert robot_for_env_attr(env) is None and K.layout_for_env(env) is None
+        assert robot_type_of(env) == env  # unknown: the attribute itself
+    assert robot_for_env_attr(None) is None and robot_for_env_attr(["MujocoUR5eCableEnv"]) is None
 
 
 @pytest.mark.parametrize("name", sorted(ENVS))
@@ -21,7 +62,8 @@ def test_entry_matches_its_task_and_expert(name):
     task_class = entry.load_task_class()
     assert task_class is TASKS[name] and entry.load_expert_class() is EXPERTS[name]
     assert task_class.rmb_env_name == entry.rmb_env_name
-    for alias in (entry.task, entry.rmb_env_name, entry.gym_id, entry.lerobot_type):
+    aliases = (entry.name, entry.rmb_env_name, entry.env_attr, entry.gym_id, entry.lerobot_type)
+    for alias in aliases:
         assert entry_for(alias) is entry
 
 

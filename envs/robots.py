@@ -1,0 +1,244 @@
+"""Robots as data: one simulator-neutral record per robot, the one place robot facts live.
+
+A :class:`Robot` is a list of arms (one for a UR5e, two for a dual UR5e); each :class:`Arm` has
+its joints, one :class:`Gripper` (command range, open/closed values, how its measured value is
+computed), the frames RMB and the experts use (root, end-effector, tool centre point, wrench),
+an optional hand camera, the pose it is mounted at and its home pose. From the record follow
+the key layout (:attr:`Robot.layout`), the joint vector RMB records (per arm: arm joints, then
+the gripper value), the camera names and the names RMB spells (``UR5e`` in
+``MujocoUR5eCableEnv``, the ``robot_type`` of converted datasets).
+
+What is neutral and what is not: joint and frame names are those of the robot's model as the
+simulator composes it (a MuJoCo backend resolves frames as sites or bodies, another backend
+by its own lookup, a real arm by position in the joint vector). How a simulator builds the
+robot (which model files, where the gripper attaches, which actuators drive it) is that
+simulator's business: :mod:`rmb_lerobot.envs.mujoco.robot` for MuJoCo. Nothing here imports a
+simulator, so the env registry and the converters can read robot facts cheaply.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rmb_lerobot.keys import RobotLayout
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A position (m) and unit quaternion ``(w, x, y, z)`` in a parent frame."""
+
+    pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class HandCamera:
+    """A camera fixed to an arm's hand frame (:attr:`Arm.hand_frame`), fovy in degrees."""
+
+    name: str
+    pose: Pose
+    fovy: float
+
+
+@dataclass(frozen=True)
+class Gripper:
+    """One gripper: what its command means and how its measured value is computed.
+
+    RMB stores one number per gripper, in the units of its command (0..255 for a Robotiq
+    2F-85, 0..1 for the Panda hand). The measured value is ``measured_scale`` times the mean of
+    the ``joints`` positions (RMB's formula for every robot it has), so recorded measured and
+    command values are comparable.
+    """
+
+    joints: tuple[str, ...]
+    open: float  # command value of the fully open gripper
+    closed: float  # command value of the fully closed gripper
+    measured_scale: float
+    home: float | None = None  # command at episode start; None: open
+
+    def __post_init__(self) -> None:
+        if not self.joints:
+            raise ValueError("a gripper needs at least one joint to measure")
+        if self.open == self.closed:
+            raise ValueError(f"gripper open and closed values are both {self.open}")
+
+    @property
+    def command_range(self) -> tuple[float, float]:
+        """``(low, high)`` of the command (open and closed, in whichever order they are)."""
+        return (min(self.open, self.closed), max(self.open, self.closed))
+
+    @property
+    def home_command(self) -> float:
+        return self.open if self.home is None else self.home
+
+
+@dataclass(frozen=True)
+class Arm:
+    """One arm of a robot with its gripper.
+
+    ``root_frame`` is the frame RMB's end-effector poses are given in (the arm's base frame),
+    placed in the world at ``mount``; ``eef_frame`` is the pose RMB records (the flange),
+    ``tcp_frame`` the tool centre point the scripted experts steer (between the fingers),
+    ``hand_frame`` the body the gripper is mounted on (hand camera, wrench sensor, objects
+    held by a weld), ``wrench_frame`` where the force/torque sensor measures.
+    """
+
+    name: str
+    joints: tuple[str, ...]
+    home: tuple[float, ...]  # arm joint angles (rad) of the home pose
+    gripper: Gripper
+    mount: Pose
+    root_frame: str
+    eef_frame: str
+    tcp_frame: str
+    hand_frame: str
+    wrench_frame: str | None = None
+    hand_camera: HandCamera | None = None
+
+    def __post_init__(self) -> None:
+        if len(self.home) != len(self.joints):
+            raise ValueError(
+                f"arm {self.name!r}: {len(self.joints)} joints but {len(self.home)} home values"
+            )
+
+    @property
+    def num_joints(self) -> int:
+        """Arm joints plus the gripper value: this arm's share of the joint vector."""
+        return len(self.joints) + 1
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A robot: its arms, how RMB spells it, and the env names of the original RMB it has.
+
+    ``name`` is the short name used in every derived name (``rmb_ur5e_cable``, the
+    ``robot_type`` of converted datasets); ``rmb_name`` is RMB's spelling in environment names
+    (``MujocoUR5eCable``). ``rmb_envs``: ``env`` attributes the original RMB writes for this
+    robot's environments that our registry does not derive (other simulators, real-robot
+    demos), so episodes recorded by RMB itself are recognised exactly.
+    """
+
+    name: str
+    rmb_name: str
+    arms: tuple[Arm, ...]
+    rmb_envs: frozenset[str] = frozenset()
+
+    def __post_init__(self) -> None:
+        if not self.arms:
+            raise ValueError(f"robot {self.name!r} has no arm")
+        for what, names in (("arm", [a.name for a in self.arms]), ("camera", self.cameras)):
+            if len(set(names)) != len(names):
+                raise ValueError(f"robot {self.name!r}: {what} names repeat: {names}")
+
+    @property
+    def layout(self) -> RobotLayout:
+        """How many numbers RMB's keys hold for this robot (one eef and gripper per arm)."""
+        return RobotLayout(
+            num_joints=sum(arm.num_joints for arm in self.arms),
+            num_grippers=len(self.arms),
+            num_eefs=len(self.arms),
+        )
+
+    @property
+    def cameras(self) -> tuple[str, ...]:
+        """The robot's own cameras (hand cameras), in arm order."""
+        return tuple(arm.hand_camera.name for arm in self.arms if arm.hand_camera is not None)
+
+    def joint_slices(self) -> tuple[tuple[slice, int], ...]:
+        """Per arm: the slice of its arm joints in the joint vector, and its gripper's index."""
+        out, start = [], 0
+        for arm in self.arms:
+            end = start + len(arm.joints)
+            out.append((slice(start, end), end))
+            start = end + 1
+        return tuple(out)
+
+    def home_command(self, arm_homes: tuple[tuple[float, ...], ...] | None = None) -> np.ndarray:
+        """The home joint vector as RMB records it (per arm: joints, gripper command).
+
+        ``arm_homes``: per-arm joint angles replacing the robots' own (a task's start pose).
+        """
+        homes = arm_homes if arm_homes is not None else tuple(arm.home for arm in self.arms)
+        if len(homes) != len(self.arms):
+            raise ValueError(f"robot {self.name!r}: {len(self.arms)} arms, {len(homes)} homes")
+        values: list[float] = []
+        for arm, home in zip(self.arms, homes, strict=True):
+            if len(home) != len(arm.joints):
+                raise ValueError(
+                    f"robot {self.name!r} arm {arm.name!r}: home pose {tuple(home)} has "
+                    f"{len(home)} values, expected {len(arm.joints)}"
+                )
+            values.extend([*home, arm.gripper.home_command])
+        return np.array(values, dtype=np.float64)
+
+
+_UR5E_GRIPPER = "gripper/"  # prefix of the Robotiq 2F-85's names inside the composed model
+
+UR5E = Robot(
+    name="ur5e",
+    rmb_name="UR5e",
+    arms=(
+        Arm(
+            name="arm",
+            joints=(
+                "shoulder_pan_joint",
+                "shoulder_lift_joint",
+                "elbow_joint",
+                "wrist_1_joint",
+                "wrist_2_joint",
+                "wrist_3_joint",
+            ),
+            # RMB's MujocoUR5eInsertEnv start pose (pan towards the table, gripper down).
+            home=(np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi / 2),
+            gripper=Gripper(
+                # RMB: measured gripper = rad2deg(mean of these four angles) / 45 * 255.
+                joints=tuple(
+                    _UR5E_GRIPPER + name
+                    for name in (
+                        "right_driver_joint",
+                        "right_spring_link_joint",
+                        "left_driver_joint",
+                        "left_spring_link_joint",
+                    )
+                ),
+                open=0.0,
+                closed=255.0,
+                measured_scale=255.0 / np.deg2rad(45.0),
+            ),
+            # RMB's stand: arm base 0.605 m behind the table centre, 0.8 m high, turned by pi
+            # about z so that the root frame is the UR DH base frame and the arm faces +x.
+            mount=Pose(pos=(-0.605, 0.0, 0.8), quat=(0.0, 0.0, 0.0, 1.0)),
+            root_frame="ur5e_root_frame",
+            eef_frame="attachment_site",
+            tcp_frame=_UR5E_GRIPPER + "pinch",
+            hand_frame=_UR5E_GRIPPER + "base_mount",
+            wrench_frame=_UR5E_GRIPPER + "ft_site",
+            # RMB's wrist D435i: 5 cm off the tool axis, looking along the gripper, fovy 62 deg.
+            hand_camera=HandCamera("hand", Pose(pos=(0.0, 0.05, 0.0), quat=(0, 0, 1, 0)), 62.0),
+        ),
+    ),
+    # The original RMB's single-arm UR5e envs (gymnasium spec names, as its recorder writes
+    # them) that the registry does not derive: other simulators, real demos, and RMB's single
+    # Cabinet (ours are CabinetHinge and CabinetSlide).
+    rmb_envs=frozenset(
+        {
+            "MujocoUR5eCabinetEnv",
+            "IsaacUR5eChainEnv",
+            "IsaacUR5eCabinetEnv",
+            "RealUR5eDemoEnv",
+        }
+    ),
+)
+
+ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E,)}
+"""Every robot by short name."""
+
+
+def robot_for(name: str) -> Robot:
+    """A robot record by short name; the error lists the known ones."""
+    try:
+        return ROBOTS[name]
+    except KeyError:
+        raise ValueError(f"unknown robot {name!r}; known: {', '.join(sorted(ROBOTS))}") from None

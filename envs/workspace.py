@@ -1,0 +1,70 @@
+"""The arena a task is placed in: the table and the fixed cameras, simulator-neutral.
+
+Tasks place their objects relative to :attr:`Workspace.table` (its top surface height and
+centre) instead of module constants, so one task serves every robot whose scene has such a
+table; the robots' own mounts come from their records (:mod:`rmb_lerobot.envs.robots`). A
+backend builds the workspace in its simulator (:func:`rmb_lerobot.envs.mujoco.scene.build_scene`
+for MuJoCo).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table: the centre of its top surface (world frame) and its half size in x and y."""
+
+    top_centre: tuple[float, float, float]
+    half_size: tuple[float, float]
+
+    @property
+    def top_z(self) -> float:
+        """Height of the table's top surface (m)."""
+        return self.top_centre[2]
+
+    def on_top(self, x: float, y: float, height: float = 0.0) -> np.ndarray:
+        """World position ``(x, y)`` at ``height`` above the table top (x, y in the world)."""
+        return np.array([x, y, self.top_z + height])
+
+
+@dataclass(frozen=True)
+class SceneCamera:
+    """A fixed camera placed by position and the point it looks at (world z is up)."""
+
+    name: str
+    pos: tuple[float, float, float]
+    lookat: tuple[float, float, float]
+    fovy: float = 45.0
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """Table and fixed cameras of a scene (the robot adds its hand cameras)."""
+
+    name: str
+    table: Table
+    cameras: tuple[SceneCamera, ...]
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        return tuple(camera.name for camera in self.cameras)
+
+
+RMB_TABLE = Workspace(
+    name="table",
+    # RMB's env_ur5e_*.xml: table top at z = 0.815 m centred on the origin.
+    table=Table(top_centre=(0.0, 0.0, 0.815), half_size=(0.275, 0.5)),
+    # RMB's front camera (pos 0.5 0 1.5, pitched 45 deg down towards the robot), two side views.
+    cameras=(
+        SceneCamera("front", pos=(0.5, 0.0, 1.5), lookat=(-0.185, 0.0, 0.815)),
+        SceneCamera("left", pos=(0.0, 0.75, 1.3), lookat=(-0.15, 0.0, 0.9)),
+        SceneCamera("right", pos=(0.0, -0.75, 1.3), lookat=(-0.15, 0.0, 0.9)),
+    ),
+)
+"""The table scene of RMB's MuJoCo UR5e tasks."""
+
+WORKSPACES: dict[str, Workspace] = {ws.name: ws for ws in (RMB_TABLE,)}

@@ -1,0 +1,76 @@
+"""Robot records: the layout, joint vector and cameras follow from the arms."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from rmb_lerobot.envs.robots import ROBOTS, UR5E, Arm, Gripper, HandCamera, Pose, Robot, robot_for
+
+from rmb_lerobot import keys as K
+
+
+def _arm(name: str, joints: int, gripper: Gripper, camera: str | None = None) -> Arm:
+    return Arm(
+        name=name,
+        joints=tuple(f"{name}_joint{i + 1}" for i in range(joints)),
+        home=(0.0,) * joints,
+        gripper=gripper,
+        mount=Pose(),
+        root_frame=f"{name}_root",
+        eef_frame=f"{name}_flange",
+        tcp_frame=f"{name}_tcp",
+        hand_frame=f"{name}_hand",
+        hand_camera=HandCamera(camera, Pose(), 60.0) if camera else None,
+    )
+
+
+ROBOTIQ = Gripper(joints=("finger",), open=0.0, closed=255.0, measured_scale=255 / 0.8)
+PANDA_HAND = Gripper(joints=("finger1", "finger2"), open=1.0, closed=0.0, measured_scale=25.0)
+
+
+def test_the_ur5e_record_is_rmbs_ur5e():
+    assert robot_for("ur5e") is UR5E and ROBOTS == {"ur5e": UR5E}
+    assert UR5E.layout == K.UR5E_LAYOUT  # 6 joints + 1 gripper value, one eef
+    assert UR5E.cameras == ("hand",)
+    (arm,) = UR5E.arms
+    assert arm.gripper.command_range == (0.0, 255.0) and arm.gripper.home_command == 0.0
+    home = UR5E.home_command()
+    assert home.shape == (7,) and home[-1] == 0.0
+    assert home[:6] == pytest.approx(np.array([1.0, -0.5, -0.55, -0.45, 0.5, 0.5]) * np.pi)
+
+
+def test_other_rmb_robots_fit_the_record():
+    """xArm7 (7 joints + 0..255 gripper), Panda (7 + a 0..1 gripper that opens at 1) and the
+    dual UR5e (two arms, left_hand/right_hand cameras) need no change to the record."""
+    xarm7 = Robot("xarm7", "Xarm7", (_arm("arm", 7, ROBOTIQ, "hand"),))
+    panda = Robot("panda", "Panda", (_arm("arm", 7, PANDA_HAND),))
+    dual = Robot(
+        "ur5e_dual",
+        "UR5eDual",
+        (_arm("left", 6, ROBOTIQ, "left_hand"), _arm("right", 6, ROBOTIQ, "right_hand")),
+    )
+    assert xarm7.layout == K.RobotLayout(num_joints=8)
+    assert panda.layout == K.RobotLayout(num_joints=8)
+    assert panda.arms[0].gripper.command_range == (0.0, 1.0)
+    assert panda.home_command()[-1] == 1.0  # starts open
+    assert dual.layout == K.RobotLayout(num_joints=14, num_grippers=2, num_eefs=2)
+    assert dual.cameras == ("left_hand", "right_hand")
+    # RMB's joint vector: per arm its joints, then its gripper value.
+    assert dual.joint_slices() == ((slice(0, 6), 6), (slice(7, 13), 13))
+    home = dual.home_command(((0.1,) * 6, (0.2,) * 6))
+    assert home.tolist() == [0.1] * 6 + [0.0] + [0.2] * 6 + [0.0]
+
+
+def test_inconsistent_records_are_refused_with_the_reason():
+    with pytest.raises(ValueError, match="arm 'arm': 6 joints but 5 home values"):
+        dataclasses.replace(UR5E.arms[0], home=(0.0,) * 5)
+    with pytest.raises(ValueError, match="camera names repeat"):
+        Robot("twin", "Twin", (_arm("a", 6, ROBOTIQ, "hand"), _arm("b", 6, ROBOTIQ, "hand")))
+    with pytest.raises(ValueError, match="has no arm"):
+        Robot("none", "None", ())
+    with pytest.raises(ValueError, match="open and closed values are both 1"):
+        Gripper(joints=("f",), open=1.0, closed=1.0, measured_scale=1.0)
+    with pytest.raises(ValueError, match=r"home pose \(0.0,\) has 1 values, expected 6"):
+        UR5E.home_command(((0.0,),))
+    with pytest.raises(ValueError, match="unknown robot 'kuka'; known: ur5e"):
+        robot_for("kuka")
