@@ -158,11 +158,14 @@ def add_servo(
     ctrl_range: tuple[float, float],
     force_range: tuple[float, float] | None = None,
     gain: float | None = None,
+    gear: float = 1.0,
     trn: mujoco.mjtTrn = mujoco.mjtTrn.mjTRN_JOINT,
 ) -> mujoco.MjsActuator:
-    """MJCF ``<general biastype="affine">`` position servo: force ``gain * ctrl - kp * q -
-    kv * qdot`` (``gain`` defaults to ``kp``: the command is the target position)."""
+    """MJCF ``<general biastype="affine">`` position servo: force ``gain * ctrl - kp * l -
+    kv * ldot`` on the actuator length ``l = gear * q`` (``gain`` defaults to ``kp``: with
+    gear 1 the command is the target position)."""
     act = spec.add_actuator(name=name, target=target, trntype=trn)
+    act.gear[0] = gear
     act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
     act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
     act.gainprm[0] = kp if gain is None else gain

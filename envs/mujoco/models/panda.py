@@ -16,14 +16,14 @@ Sources (RMB = RoboManipBaselines commit 8535948, paths under
   overrides line 6's ``general`` +-87 for ``position`` actuators; measured by compiling RMB's
   defaults) and +-12 for joints 5-7;
 - gripper: command 0..1 = finger opening 0..0.04 m, measured ``mean(fingers) / 0.04``
-  (``mujoco/panda/MujocoPandaEnvBase.py`` line 106). RMB's ``actuator8`` (lines 139-140: gear
-  25 on finger_joint1, up to 125 N on a 15 g finger, 233 rad/s against dt 0.004) makes a step
-  command tunnel through a 3 cm cube. This model drives both fingers through a tendon
-  ``split`` (half of each finger) as the Menagerie Panda does, with the same command and
-  measured value as RMB; its stiffness is 1000 N/m (Menagerie: 100, gain 0.04 * kp,
-  bias (0, -kp, -10), |force| <= 100): Menagerie's grips a 3 cm cube with 0.75 N per finger
-  and lets a 50 g cube slip 2.5 cm during a 10 cm lift (measured); 1000 grips with 7.5 N,
-  holds it (< 4 mm), and stays critically damped (finger + armature 0.115 kg, damping 10);
+  (``mujoco/panda/MujocoPandaEnvBase.py`` line 106), RMB's ``actuator8`` as is
+  (``panda_config.xml`` lines 139-140: gear 25 on finger_joint1, gain 10, bias
+  (0, -10, -0.1), |force| <= 5) with the finger equality (line 122). On robotblockset's
+  Menagerie fingers a step close tunnelled through a 3 cm cube (docs/robot-models.md); on these
+  fingers it does not (measured: cube, 1 cm plate and the cable's 2 cm capsule held after a
+  step close, cube picked and lifted in 12 poses, < 1 mm slip), and it holds the cable's
+  capsule where Menagerie's tendon actuator (rescaled to 0..1, stiffened to 1000 N/m) let it
+  drop: so RMB's is kept;
 - fingertip contact: the rubber-tip boxes take RMB's ``fingertip_pad_collision_4`` contact
   parameters (``panda_config.xml`` line 30); the fingers' other boxes are render-only, as in
   RMB (lines 18-29); the finger equality takes RMB's softness (line 122);
@@ -66,9 +66,7 @@ JOINTS = tuple(f"joint{i}" for i in range(1, 8))
 ACTUATORS = tuple(f"actuator{i}" for i in range(1, 8))
 GRIPPER_ACTUATOR = "actuator8"
 GRIPPER_JOINTS = ("finger_joint1", "finger_joint2")
-GRIPPER_TENDON = "split"
 GRIPPER_CTRL_RANGE = (0.0, 1.0)
-GRIPPER_STIFFNESS = 1000.0  # N/m on the tendon; see the module docstring
 FINGER_TRAVEL = 0.04  # m, each finger (URDF and RMB joint range)
 HOME = tuple(float(q) for q in np.deg2rad([0, 25, 0, -58, 0, 82, -40]))
 RMB_MOUNT_POS: Vec3 = (-0.5, 0.0, 0.8)
@@ -145,19 +143,15 @@ def build_panda(*, mount_pos: Vec3 = RMB_MOUNT_POS) -> RobotModel:
             ctrl_range=tuple(spec.joint(joint).range),
             force_range=(-force, force),
         )
-    tendon = spec.add_tendon(name=GRIPPER_TENDON)
-    for joint in GRIPPER_JOINTS:
-        tendon.wrap_joint(joint, 0.5)
-    add_servo(
+    add_servo(  # panda_config.xml lines 139-140
         spec,
         GRIPPER_ACTUATOR,
-        GRIPPER_TENDON,
-        kp=GRIPPER_STIFFNESS,
-        kv=10.0,  # Menagerie's
-        gain=FINGER_TRAVEL * GRIPPER_STIFFNESS,
+        GRIPPER_JOINTS[0],
+        kp=10.0,
+        kv=0.1,
+        gear=25.0,
         ctrl_range=GRIPPER_CTRL_RANGE,
-        force_range=(-100.0, 100.0),
-        trn=mujoco.mjtTrn.mjTRN_TENDON,
+        force_range=(-5.0, 5.0),
     )
     spec.body("panda_link7").add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)
     spec.body(HAND_BODY).add_site(name=TCP_SITE, pos=[0, 0, 0.1034], size=[0.005, 0, 0], group=4)
