@@ -32,12 +32,12 @@ def physics_steps_per_second(env: RmbEnv, seconds: float = 2.0) -> float:
     """Raw ``mj_step`` rate on the env's own model and state, holding the home command: the
     best of 0.25 s rounds over ``seconds``."""
     env.reset(seed=0)
-    data = env.data
+    data = env.sim.data
     best, end = 0.0, time.perf_counter() + seconds
     while time.perf_counter() < end:
         steps, start = 0, time.perf_counter()
         while time.perf_counter() - start < 0.25:
-            mujoco.mj_step(env.model, data, nstep=100)
+            mujoco.mj_step(env.sim.model, data, nstep=100)
             steps += 100
         best = max(best, steps / (time.perf_counter() - start))
     return best
@@ -83,7 +83,7 @@ def main() -> None:
     base_env = RmbEnv(task, cameras=(), **options)
     construct_first = time.perf_counter() - start
     physics = physics_steps_per_second(base_env)
-    limit = physics / base_env.frame_skip
+    limit = physics / base_env.sim.frame_skip
     rows = [("raw mj_step", "-", "-", (limit, float("nan")))]
     rows.append(
         ("0 cameras", "-", "-", env_steps_per_second(base_env, args.steps * 10, args.repeats))

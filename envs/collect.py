@@ -84,13 +84,10 @@ class Collector:
     """One env + expert that records episodes; lives in a worker process (or the caller's)."""
 
     def __init__(self, config: CollectConfig, on_partial: Callable[[], None] | None = None):
-        from rmb_lerobot.envs.base import RmbEnv
-
         self.config = config
         self.on_partial = on_partial  # called when an exception aborts an episode
         entry = entry_for(config.env)
-        self.env = RmbEnv(
-            entry.load_task_class()(),
+        self.env = entry.make(
             cameras=config.cameras,
             image_size=config.image_size,
             depth=config.depth,

@@ -16,7 +16,7 @@ import numpy as np
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import OBS_STR
-from rmb_lerobot.envs.registry import ENVS, EnvEntry, make_env
+from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, make_env
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
@@ -58,7 +58,7 @@ class RmbEnvConfig(EnvConfig):
     world_idx: int | None = None
 
     def __post_init__(self) -> None:
-        layout = K.UR5E_LAYOUT
+        layout = entry_for(self.task).robot_record.layout if self.task else K.UR5E_LAYOUT
         shape = (self.image_height, self.image_width, 3)
         self.features = {
             N.ACTION_KEY: PolicyFeature(
@@ -167,9 +167,14 @@ def make_lerobot_env(task: str, world_idx: int | None = None, **kwargs) -> gym.E
 
 def _register(entry: EnvEntry) -> type[RmbEnvConfig]:
     name = "".join(part.capitalize() for part in entry.lerobot_type.split("_")) + "Env"
+    # RMB's default policy cameras: the scene's first (front) and the robot's own (hand).
+    cameras = (entry.workspace.cameras[0].name, *entry.robot_record.cameras)
     cls = make_dataclass(
         name,
-        [("task", str | None, field(default=entry.rmb_env_name))],
+        [
+            ("task", str | None, field(default=entry.rmb_env_name)),
+            ("cameras", list[str], field(default_factory=lambda: list(cameras))),
+        ],
         bases=(RmbEnvConfig,),
         namespace={"__doc__": f"LeRobot env type for RMB's {entry.rmb_env_name}."},
     )

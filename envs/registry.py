@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 from rmb_lerobot.envs.robots import ROBOTS, Robot
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.base import RmbEnv
 
 GYM_NAMESPACE = "rmb_lerobot"
 GYM_VERSION = "v0"
@@ -42,6 +45,11 @@ SIMULATORS: dict[str, Simulator] = {sim.name: sim for sim in (Simulator("mujoco"
 
 def _camel(name: str) -> str:
     return "".join(part.capitalize() for part in name.split("_"))
+
+
+def rmb_env_name(simulator: str, robot: Robot, task: str) -> str:
+    """RMB's environment class name without ``Env``: ``MujocoUR5eInsert``."""
+    return f"{SIMULATORS[simulator].rmb_name}{robot.rmb_name}{_camel(task)}"
 
 
 @dataclass(frozen=True)
@@ -75,8 +83,7 @@ class EnvEntry:
     @property
     def rmb_env_name(self) -> str:
         """RMB's environment class name without the ``Env`` suffix, e.g. ``MujocoUR5eInsert``."""
-        sim = SIMULATORS[self.simulator]
-        return f"{sim.rmb_name}{self.robot_record.rmb_name}{_camel(self.task)}"
+        return rmb_env_name(self.simulator, self.robot_record, self.task)
 
     @property
     def env_attr(self) -> str:
@@ -101,6 +108,13 @@ class EnvEntry:
     def cameras(self) -> tuple[str, ...]:
         """Every camera of the env: the workspace's fixed ones, then the robot's."""
         return (*self.workspace.camera_names, *self.robot_record.cameras)
+
+    def make(self, **kwargs: Any) -> RmbEnv:
+        """This entry's env core (keyword arguments: :class:`RmbEnv`'s), without time limit."""
+        from rmb_lerobot.envs.base import RmbEnv
+
+        task = self.load_task_class()(self.workspace)
+        return RmbEnv(task, self.robot_record, simulator=self.simulator, **kwargs)
 
     def load_task_class(self) -> type:
         return _load(self.task_class)
@@ -183,10 +197,7 @@ def make_env(task: str, max_episode_steps: int | None = None, **kwargs: Any) -> 
     The time limit comes from the task (``Task.max_episode_steps``) unless given, so the table
     need not import the task to register it.
     """
-    from rmb_lerobot.envs.base import RmbEnv
-
-    entry = entry_for(task)
-    env = RmbEnv(entry.load_task_class()(), **kwargs)
+    env = entry_for(task).make(**kwargs)
     limit = max_episode_steps if max_episode_steps is not None else env.task.max_episode_steps
     return gym.wrappers.TimeLimit(env, max_episode_steps=limit)
 

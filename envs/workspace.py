@@ -13,13 +13,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+TABLE_TOP_THICKNESS = 0.015  # m, RMB's table board
+
 
 @dataclass(frozen=True)
 class Table:
-    """A table: the centre of its top surface (world frame) and its half size in x and y."""
+    """A table: the centre of its top surface (world frame) and its half size in x and y.
+
+    It is drawn as a board (:data:`TABLE_TOP_THICKNESS`) on a base box from the floor;
+    ``base_half_height`` is the base's half height (None: up to the board).
+    """
 
     top_centre: tuple[float, float, float]
     half_size: tuple[float, float]
+    base_half_height: float | None = None
+
+    @property
+    def base_half_z(self) -> float:
+        if self.base_half_height is not None:
+            return self.base_half_height
+        return (self.top_z - TABLE_TOP_THICKNESS) / 2
 
     @property
     def top_z(self) -> float:
@@ -57,7 +70,7 @@ class Workspace:
 RMB_TABLE = Workspace(
     name="table",
     # RMB's env_ur5e_*.xml: table top at z = 0.815 m centred on the origin.
-    table=Table(top_centre=(0.0, 0.0, 0.815), half_size=(0.275, 0.5)),
+    table=Table(top_centre=(0.0, 0.0, 0.815), half_size=(0.275, 0.5), base_half_height=0.4),
     # RMB's front camera (pos 0.5 0 1.5, pitched 45 deg down towards the robot), two side views.
     cameras=(
         SceneCamera("front", pos=(0.5, 0.0, 1.5), lookat=(-0.185, 0.0, 0.815)),

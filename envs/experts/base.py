@@ -4,6 +4,12 @@ An expert is called like any policy, ``action = expert(observation)``, and emits
 env's action mode, so its rollouts can be recorded or evaluated like a learned policy. It reads
 object poses from the simulator (privileged information a learned policy does not get).
 
+Experts are written against the robot record's TCP and gripper (:mod:`rmb_lerobot.envs.robots`:
+the arm's eef and tool-centre-point frames, the gripper's open and closed commands) and read
+the world through the backend's simulator-neutral :class:`~rmb_lerobot.envs.backend.SceneState`,
+so one expert serves every robot that shares a task where the geometry allows. They drive one
+arm (:attr:`ScriptedExpert.arm_index`, the first).
+
 Control: a reference point moves towards the current waypoint at bounded speed; an integral
 term on the measured tool position cancels the steady-state sag of RMB's position-controlled
 joints (no gravity compensation, as in RMB); IK turns the corrected tool pose into joint
@@ -17,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
 from scipy.spatial.transform import Rotation
 
@@ -51,6 +58,8 @@ class ScriptedExpert(ABC):
     machine over the task's phases). Call :meth:`reset` after every ``env.reset``.
     """
 
+    arm_index = 0  # the arm the expert drives
+
     def __init__(
         self,
         env: Any,
@@ -61,7 +70,11 @@ class ScriptedExpert(ABC):
         max_correction: float = 0.05,
     ):
         self.env: RmbEnv = env.unwrapped
-        self.kin = self.env.kinematics
+        self.sim: Backend = self.env.sim
+        self.arm = self.env.robot.arms[self.arm_index]
+        self._arm_joints, self.gripper_index = self.env.robot.joint_slices()[self.arm_index]
+        # The gripper's open and closed commands, from the robot record.
+        self.open_gripper, self.closed_gripper = self.arm.gripper.open, self.arm.gripper.closed
         self.dt = self.env.control_dt
         self.max_step = max_speed * self.dt
         self.max_angle_step = max_angular_speed * self.dt
@@ -70,7 +83,7 @@ class ScriptedExpert(ABC):
         self._ref_pos = np.zeros(3)
         self._ref_rot = Rotation.identity()
         self._correction = np.zeros(3)
-        self._q = self.env.home_command[:-1].copy()
+        self._q = self.env.home_command[self._arm_joints].copy()
 
     # ------------------------------------------------------------------ task hooks
     @abstractmethod
@@ -90,9 +103,17 @@ class ScriptedExpert(ABC):
 
     # ------------------------------------------------------------------ helpers
     def eef_world(self) -> tuple[np.ndarray, Rotation]:
-        """Measured eef-site position and orientation in the world frame."""
-        site = self.env.data.site(self.env.robot.eef_site)
-        return site.xpos.copy(), Rotation.from_matrix(site.xmat.reshape(3, 3))
+        """Measured eef position and orientation in the world frame."""
+        pos, rot = self.sim.site_pose(self.arm.eef_frame)
+        return pos, Rotation.from_matrix(rot)
+
+    def tcp_world(self) -> tuple[np.ndarray, np.ndarray]:
+        """Measured tool centre point: world position and rotation matrix."""
+        return self.sim.site_pose(self.arm.tcp_frame)
+
+    def table_z(self) -> float:
+        """Height of the workspace's table top (m)."""
+        return self.env.task.workspace.table.top_z
 
     def reached(self, target: np.ndarray, tol: float, xy_only: bool = False) -> bool:
         """Whether both the reference and the measured tool are within ``tol`` of ``target``."""
@@ -108,7 +129,7 @@ class ScriptedExpert(ABC):
         self._ref_pos = self.measured_tool()
         self._ref_rot = rot
         self._correction = np.zeros(3)
-        self._q = self.env.command[:-1].copy()
+        self._q = self.env.command[self._arm_joints].copy()
 
     def __call__(self, observation: Any = None) -> np.ndarray:
         return self.select_action(observation)
@@ -132,13 +153,13 @@ class ScriptedExpert(ABC):
         if norm > self.max_correction:
             self._correction *= self.max_correction / norm
         eef_pos = self._ref_pos + self._correction - self._ref_rot.apply(self.tool_offset())
-        pose = self.kin.world_to_root(eef_pos, self._ref_rot.as_matrix())
+        pose = self.sim.world_to_root(self.arm_index, eef_pos, self._ref_rot.as_matrix())
         return self._action(pose, wp.gripper)
 
     def _action(self, pose: np.ndarray, gripper: float) -> np.ndarray:
         mode = self.env.action_mode
         if mode == "joint":
-            self._q = self.kin.ik(pose, self._q).qpos
+            self._q = self.sim.ik(self.arm_index, pose, self._q)
             action = np.append(self._q, gripper)
         elif mode == "eef_abs":
             action = np.append(pose_to_policy(pose), gripper)
@@ -158,9 +179,8 @@ class GripperExpert(ScriptedExpert):
     first) and may override :meth:`measured_tool` to move the tool point onto a held object.
     """
 
-    open_gripper, closed_gripper = 0.0, 255.0
     min_gripper_steps = 10  # steps of closing / opening before the gripper counts as settled
-    settle_tol = 0.5  # gripper value change per step that counts as settled
+    settle_fraction = 0.5 / 255  # gripper change per step that counts as settled (of its range)
     still_speed = 0.01  # tool speed below which the hand counts as at rest (m/s)
     # The last ``slow_zone`` of an approach with :meth:`_slowly` is done slowly, so the hand
     # arrives at rest (the integral correction does not overshoot) and sets things down softly.
@@ -169,6 +189,8 @@ class GripperExpert(ScriptedExpert):
     def __init__(self, env: Any, **kwargs: Any) -> None:
         super().__init__(env, **kwargs)
         self._cruise_step = self.max_step
+        low, high = self.arm.gripper.command_range
+        self.settle_tol = self.settle_fraction * (high - low)
 
     def on_reset(self) -> None:
         """Cruise speed, gripper settling and tool speed reset; the pinch point's offset in the
@@ -182,8 +204,8 @@ class GripperExpert(ScriptedExpert):
         self._tool_speed = 0.0
 
     def pinch_point(self) -> np.ndarray:
-        """Measured world position of the gripper's pinch point (the TCP site)."""
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+        """Measured world position of the gripper's pinch point (the TCP)."""
+        return self.tcp_world()[0]
 
     def tool_offset(self) -> np.ndarray:
         return self._offset
@@ -196,7 +218,7 @@ class GripperExpert(ScriptedExpert):
         command starts): true once the command has run ``min_gripper_steps`` and the fingers
         have stopped moving, i.e. they hold the object or are fully open."""
         self._count += 1
-        gripper = self.env.measured_joint_pos()[-1]
+        gripper = self.env.measured_joint_pos()[self.gripper_index]
         settled = abs(gripper - self._last_gripper) < self.settle_tol
         self._last_gripper = gripper
         return self._count >= self.min_gripper_steps and settled

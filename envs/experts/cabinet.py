@@ -34,7 +34,6 @@ from rmb_lerobot.envs.tasks.cabinet import (
 )
 from scipy.spatial.transform import Rotation
 
-CLOSED_GRIPPER = 255.0
 # The closed Robotiq 2F-85's fingertip block, measured on the model in the pinch-site frame
 # (x across the pads, y the closing direction, z the tool axis): the pads reach PAD_TIP beyond
 # the pinch point and PAD_HALF_WIDTH to each side; everything within 5 cm of the tip stays
@@ -67,11 +66,11 @@ class CabinetExpert(ScriptedExpert):
 
     def on_reset(self) -> None:
         self.phase = self.initial_phase
-        site = self.env.data.site(self.env.robot.tcp_site)
+        pinch_pos, pinch_mat = self.tcp_world()
         eef_pos, eef_rot = self.eef_world()
-        pinch_rot = Rotation.from_matrix(site.xmat.reshape(3, 3))
+        pinch_rot = Rotation.from_matrix(pinch_mat)
         self._offset = eef_rot.inv().apply(
-            site.xpos - eef_pos + pinch_rot.apply(self.tool_in_pinch)
+            pinch_pos - eef_pos + pinch_rot.apply(self.tool_in_pinch)
         )
         pitch = np.deg2rad(self.tool_pitch_deg)
         axis = np.array([np.cos(pitch), 0.0, -np.sin(pitch)])
@@ -95,7 +94,7 @@ class CabinetExpert(ScriptedExpert):
 
     def waypoint_at(self, pos: np.ndarray, slow: bool = False) -> Waypoint:
         self.max_step = self.approach_speed * self.dt if slow else self._cruise_step
-        return Waypoint(pos, self._rot, CLOSED_GRIPPER)
+        return Waypoint(pos, self._rot, self.arm.gripper.closed)
 
 
 class SlidePhase(Enum):
@@ -124,7 +123,7 @@ class CabinetSlideExpert(CabinetExpert):
 
     def _hook_point(self, back: float = 0.0) -> np.ndarray:
         """Pinch point beside the tab (its -y side), ``back`` further from the door."""
-        handle = self.env.data.geom(HANDLE).xpos
+        handle = self.sim.geom_pose(HANDLE)[0]
         face_x = handle[0] + HANDLE_DEPTH / 2
         y = handle[1] - HANDLE_HALF_THICKNESS - FINGER_HALF_WIDTH - self.side_gap
         return np.array([face_x - self.front_gap - self.reach - back, y, handle[2]])
@@ -141,7 +140,7 @@ class CabinetSlideExpert(CabinetExpert):
                 self.phase = SlidePhase.PUSH
                 self._push_start = target
             return self.waypoint_at(target, slow=True)
-        opened = float(self.env.data.joint(SLIDE).qpos[0])
+        opened = float(self.sim.joint_position(SLIDE)[0])
         travel = min(self.push_distance, opened + self.max_lead) + self.side_gap
         return self.waypoint_at(self._push_start + np.array([0.0, travel, 0.0]))
 
@@ -167,12 +166,12 @@ class CabinetHingeExpert(CabinetExpert):
     max_lead = np.deg2rad(12.0)  # how far the reference may run ahead of the lid
 
     def _hinge(self) -> np.ndarray:
-        return self.env.data.body(LID).xpos.copy()
+        return self.sim.body_pose(LID)[0].copy()
 
     def _entry_point(self, depth: float) -> np.ndarray:
         """Corner ``depth`` behind the front face, centred in the notch, just under the lid."""
         hinge = self._hinge()
-        face_x = self.env.data.body(CABINET).xpos[0] - HALF_DEPTH
+        face_x = self.sim.body_pose(CABINET)[0][0] - HALF_DEPTH
         return np.array([face_x + depth, hinge[1], hinge[2] - self.below_lid])
 
     def _arc_point(self, theta: float) -> np.ndarray:
@@ -194,7 +193,7 @@ class CabinetHingeExpert(CabinetExpert):
                 self._radius = self._hinge()[0] - target[0]
                 self._theta_ref = 0.0
             return self.waypoint_at(target, slow=True)
-        angle = float(self.env.data.joint(HINGE).qpos[0])
+        angle = float(self.sim.joint_position(HINGE)[0])
         theta = self._theta_ref + self.lift_rate * self.dt
         self._theta_ref = min(theta, angle + self.max_lead, self.goal_angle)
         return self.waypoint_at(self._arc_point(self._theta_ref))

@@ -28,7 +28,6 @@ from enum import Enum
 
 import numpy as np
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.cable import CABLE_END, END_BOX_HALF_SIZE, POLE1, POLE2
 from scipy.spatial.transform import Rotation
 
@@ -78,7 +77,7 @@ class CableExpert(GripperExpert):
         self._route: list[Leg] = []
         self._leg = 0
         _, eef_rot = self.eef_world()
-        box_rot = self.env.data.body(CABLE_END).xmat.reshape(3, 3)
+        box_rot = self.sim.body_pose(CABLE_END)[1]
         self._box_yaw0 = _yaw(box_rot)
         self._yaw = self._box_yaw0
         self._grasp_rot = top_down_rotation(box_rot[:, 1], eef_rot)
@@ -92,10 +91,9 @@ class CableExpert(GripperExpert):
 
     def plan_route(self) -> list[Leg]:
         """The legs of steps 2-5 for the current box and pole positions."""
-        data = self.env.data
-        pole1, pole2 = data.geom(POLE1).xpos, data.geom(POLE2).xpos
-        box = data.body(CABLE_END).xpos
-        low = TABLE_TOP_Z + END_BOX_HALF_SIZE[2] + self.drag_lift
+        pole1, pole2 = self.sim.geom_pose(POLE1)[0], self.sim.geom_pose(POLE2)[0]
+        box = self.sim.body_pose(CABLE_END)[0]
+        low = self.table_z() + END_BOX_HALF_SIZE[2] + self.drag_lift
         high = low + self.hang
         gap_x, pole_y = 0.5 * (pole1[0] + pole2[0]), pole1[1]
         radius = 0.5 * (gap_x - box[0])
@@ -121,13 +119,13 @@ class CableExpert(GripperExpert):
     def waypoint(self) -> Waypoint:
         dz = np.array([0.0, 0.0, self.grasp_dz])
         if self.phase is Phase.ABOVE:
-            target = self.env.data.body(CABLE_END).xpos + dz
+            target = self.sim.body_pose(CABLE_END)[0] + dz
             target[2] += self.approach_height
             if self.reached(target, 0.01):
                 self.phase = Phase.DESCEND
             return Waypoint(target, self._grasp_rot, self.open_gripper)
         if self.phase is Phase.DESCEND:
-            target = self.env.data.body(CABLE_END).xpos + dz
+            target = self.sim.body_pose(CABLE_END)[0] + dz
             if self.reached(target, 0.003):
                 self.phase = Phase.CLOSE
                 self._hold = target

@@ -33,7 +33,6 @@ class DoorExpert(ScriptedExpert):
     grasp_y = -0.135  # along the leaf, away from the stem at -0.17 (leaf frame, m)
     grasp_depth = 0.0  # pinch point beyond the bar's axis (m)
     stand_off = 0.10  # pre-grasp distance in front of the bar (m)
-    open_gripper, closed_gripper = 0.0, 255.0
     min_close_steps = 10
     goal_angle = np.deg2rad(-65.0)
     pull_rate = 0.4  # rad/s of door opening
@@ -46,9 +45,8 @@ class DoorExpert(ScriptedExpert):
         self._close_count = 0
         self._last_gripper = 0.0
         self._theta_ref = 0.0
-        site = self.env.data.site(self.env.robot.tcp_site)
         eef_pos, eef_rot = self.eef_world()
-        self._offset = eef_rot.inv().apply(site.xpos - eef_pos)
+        self._offset = eef_rot.inv().apply(self.tcp_world()[0] - eef_pos)
         # The gripper-down orientation pitched up about the world y axis towards the door.
         pitch = -(90.0 - self.approach_pitch_deg)
         self._grasp_rot = Rotation.from_euler("y", pitch, degrees=True) * Rotation.from_matrix(
@@ -60,19 +58,17 @@ class DoorExpert(ScriptedExpert):
         return self._offset
 
     def measured_tool(self) -> np.ndarray:
-        return self.env.data.site(self.env.robot.tcp_site).xpos.copy()
+        return self.tcp_world()[0]
 
     def _door_angle(self) -> float:
-        return float(self.env.data.joint(DOOR).qpos[0])
+        return float(self.sim.joint_position(DOOR)[0])
 
     def _leaf_point(self, theta: float, x: float) -> np.ndarray:
         """World position of leaf-frame point ``(x, grasp_y, 0)`` with the leaf at ``theta``."""
-        leaf = self.env.data.body(DOOR_LEAF)
-        closed = Rotation.from_matrix(leaf.xmat.reshape(3, 3)) * Rotation.from_euler(
-            "z", -self._door_angle()
-        )
+        leaf_pos, leaf_rot = self.sim.body_pose(DOOR_LEAF)
+        closed = Rotation.from_matrix(leaf_rot) * Rotation.from_euler("z", -self._door_angle())
         local = Rotation.from_euler("z", theta).apply([x, self.grasp_y, 0.0])
-        return leaf.xpos + closed.apply(local)
+        return leaf_pos + closed.apply(local)
 
     def waypoint(self) -> Waypoint:
         grasp_x = HANDLE_BAR_X + self.grasp_depth
@@ -88,7 +84,7 @@ class DoorExpert(ScriptedExpert):
             return Waypoint(target, self._grasp_rot, self.open_gripper)
         if self.phase is Phase.CLOSE:
             self._close_count += 1
-            gripper = self.env.measured_joint_pos()[-1]
+            gripper = self.env.measured_joint_pos()[self.gripper_index]
             settled = abs(gripper - self._last_gripper) < 0.5
             self._last_gripper = gripper
             if self._close_count >= self.min_close_steps and settled:

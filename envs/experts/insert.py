@@ -31,14 +31,14 @@ class InsertExpert(ScriptedExpert):
         return self._offset
 
     def measured_tool(self) -> np.ndarray:
-        peg = self.env.data.body(PEG)
-        axis = peg.xmat.reshape(3, 3)[:, 2]
-        ends = (peg.xpos + PEG_HALF_LENGTH * axis, peg.xpos - PEG_HALF_LENGTH * axis)
+        peg, rot = self.sim.body_pose(PEG)
+        axis = rot[:, 2]
+        ends = (peg + PEG_HALF_LENGTH * axis, peg - PEG_HALF_LENGTH * axis)
         return min(ends, key=lambda end: end[2]).copy()
 
     def waypoint(self) -> Waypoint:
-        hole = self.env.data.body(HOLE).xpos
-        gripper = self.env.home_command[-1]
+        hole = self.sim.body_pose(HOLE)[0]
+        gripper = self.env.home_command[self.gripper_index]
         above = np.array([hole[0], hole[1], hole[2] + HOLE_DEPTH + self.clearance])
         if self.phase is Phase.ABOVE:
             if self.reached(above, self.align_tol, xy_only=True) and self.reached(above, 0.01):

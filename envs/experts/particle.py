@@ -24,7 +24,6 @@ from enum import Enum
 
 import numpy as np
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.particle import (
     CASE_WALL_HALF_THICKNESS,
     GOAL,
@@ -87,12 +86,12 @@ class ParticleExpert(GripperExpert):
 
     def measured_tool(self) -> np.ndarray:
         if self._on_scoop:
-            return self.env.data.body(SCOOP).xpos.copy()
+            return self.sim.body_pose(SCOOP)[0].copy()
         return self.pinch_point()
 
     # ------------------------------------------------------------------ helpers
     def _grasp_point(self) -> np.ndarray:
-        return self.env.data.geom(SCOOP_HANDLE).xpos + np.array([0, 0, self.grasp_above_centre])
+        return self.sim.geom_pose(SCOOP_HANDLE)[0] + np.array([0, 0, self.grasp_above_centre])
 
     def _take_scoop(self) -> None:
         """Switch the tool point to the scoop's plate centre. The reference jumps to the
@@ -105,12 +104,11 @@ class ParticleExpert(GripperExpert):
 
     def plan_route(self) -> list[Leg]:
         """The legs after the grasp, for the current container positions."""
-        data = self.env.data
-        source, goal = data.body(SOURCE).xpos, data.body(GOAL).xpos
-        scoop = data.body(SCOOP).xpos
+        source, goal = self.sim.body_pose(SOURCE)[0], self.sim.body_pose(GOAL)[0]
+        scoop = self.sim.body_pose(SCOOP)[0]
         inner = SOURCE_HALF_SIDE - CASE_WALL_HALF_THICKNESS
-        carry = TABLE_TOP_Z + self.carry_height
-        skim = TABLE_TOP_Z + SCOOP_PLATE_HALF[2] + self.skim_height
+        carry = self.table_z() + self.carry_height
+        skim = self.table_z() + SCOOP_PLATE_HALF[2] + self.skim_height
         start_x = source[0] - inner + self.start_clearance + self.back_extent
         end_x = source[0] + inner - self.end_clearance - SCOOP_PLATE_HALF[0]
         y = source[1]

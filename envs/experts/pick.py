@@ -16,7 +16,6 @@ from enum import Enum
 
 import numpy as np
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.pick import FINGER_REACH, PickTask, best_grasp_yaw, grasp_yaws
 
 
@@ -44,7 +43,6 @@ class PickExpert(GripperExpert):
     def on_reset(self) -> None:
         super().on_reset()
         task: PickTask = self.env.task
-        data = self.env.data
         self.phase = Phase.ABOVE
         self._grasp = np.zeros(3)  # pinch target while closing
         self._place = np.zeros(3)  # pinch target while lowering into the basket
@@ -52,13 +50,13 @@ class PickExpert(GripperExpert):
         self._obj = task.target_object
         self._basket = task.target_basket
         index = task.objects.index(self._obj)
-        positions = np.array([data.body(o.body).xpos[:2] for o in task.objects])
+        positions = np.array([self.sim.body_pose(o.body)[0][:2] for o in task.objects])
         yaw = best_grasp_yaw(index, positions, task.objects)
         yaw = grasp_yaws(self._obj)[0] if yaw is None else yaw
         _, eef_rot = self.eef_world()
         self._rot = top_down_rotation(np.array([np.cos(yaw), np.sin(yaw), 0.0]), eef_rot)
         tallest = max(o.height for o in task.objects)
-        self._transit_z = TABLE_TOP_Z + tallest + self.approach_height
+        self._transit_z = self.table_z() + tallest + self.approach_height
         self._carry_base_z = self._carry_height(positions, index)
         self._drop = self._drop_xy()
 
@@ -68,7 +66,7 @@ class PickExpert(GripperExpert):
         object near the straight path to the basket (the gripper is above the object)."""
         task: PickTask = self.env.task
         start = positions[index]
-        goal = self.env.data.body(self._basket.body).xpos[:2]
+        goal = self.sim.body_pose(self._basket.body)[0][:2]
         reach = max(*self._obj.footprint, FINGER_REACH)
         heights = [b.height for b in task.baskets]
         for i, other in enumerate(task.objects):
@@ -78,30 +76,28 @@ class PickExpert(GripperExpert):
             distance = np.linalg.norm(positions[i] - (start + t * (goal - start)))
             if distance < reach + max(other.footprint) + self.path_margin:
                 heights.append(other.height)
-        return TABLE_TOP_Z + max(heights) + self.carry_clearance
+        return self.table_z() + max(heights) + self.carry_clearance
 
     def _drop_xy(self) -> np.ndarray:
         """Where the object's base centre goes: in the basket, as near the robot as its walls
         allow (the far basket is at the edge of the arm's reach)."""
-        basket = self.env.data.body(self._basket.body).xpos[:2]
-        body = self.env.data.body(self._obj.body)
-        axes = body.xmat.reshape(3, 3)[:2, :2]
+        basket = self.sim.body_pose(self._basket.body)[0][:2]
+        axes = self.sim.body_pose(self._obj.body)[1][:2, :2]
         half_x = np.abs(axes[0]) @ np.asarray(self._obj.footprint)  # extent along world x
         slack = max(0.0, self._basket.inner[0] - half_x - self.wall_margin)
         return basket - np.array([slack, 0.0])
 
     def _grasp_point(self) -> np.ndarray:
-        body = self.env.data.body(self._obj.body)
-        return body.xpos + body.xmat.reshape(3, 3) @ np.asarray(self._obj.grasp)
+        pos, rot = self.sim.body_pose(self._obj.body)
+        return pos + rot @ np.asarray(self._obj.grasp)
 
     def _over_basket(self, base_z: float) -> np.ndarray:
         """Pinch target that puts the object's base centre over the drop point at ``base_z``."""
-        data = self.env.data
-        held = self.measured_tool() - data.body(self._obj.body).xpos
+        held = self.measured_tool() - self.sim.body_pose(self._obj.body)[0]
         return np.array([*(self._drop + held[:2]), base_z + held[2]])
 
     def _object_over_drop(self, tol: float) -> bool:
-        rel = self.env.data.body(self._obj.body).xpos[:2] - self._drop
+        rel = self.sim.body_pose(self._obj.body)[0][:2] - self._drop
         return bool(np.max(np.abs(rel)) < tol)
 
     # ------------------------------------------------------------------ phases
@@ -136,7 +132,7 @@ class PickExpert(GripperExpert):
             still = self._tool_speed < self.still_speed
             if self.reached(target, 0.01, xy_only=True) and still and self._object_over_drop(0.01):
                 self.phase = Phase.LOWER
-                floor = self.env.data.body(self._basket.body).xpos[2] + self._basket.floor
+                floor = self.sim.body_pose(self._basket.body)[0][2] + self._basket.floor
                 self._place = self._over_basket(floor + self.drop_height)
             return Waypoint(target, self._rot, self.closed_gripper)
         if self.phase is Phase.LOWER:

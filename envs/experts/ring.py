@@ -22,7 +22,6 @@ from enum import Enum
 
 import numpy as np
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.ring import POLE, POLE_HEIGHT, RING_RADIUS, TUBE_RADIUS
 from scipy.spatial.transform import Rotation
 
@@ -74,7 +73,7 @@ class RingExpert(GripperExpert):
         # robot's base to the pole): the hand is high only on the near side of the pole, where
         # the arm reaches easily. Hanging from the hand, the ring faces the fingers' closing
         # axis, so the hand points down with its fingers closing along that line.
-        base = self.env.data.body(self.env.robot.root_body).xpos
+        base = self.sim.body_pose(self.arm.root_frame)[0]
         outward = self._pole() - base
         outward[2] = 0.0
         self._outward = outward / np.linalg.norm(outward)
@@ -85,7 +84,7 @@ class RingExpert(GripperExpert):
 
     # ------------------------------------------------------------------ helpers
     def _ring(self) -> np.ndarray:
-        return self.env.task.ring_points(self.env.model, self.env.data)
+        return self.env.task.ring_points(self.sim)
 
     def _grasp_point(self) -> np.ndarray:
         """Middle of the ring's lowest segment (the two lowest vertices)."""
@@ -94,7 +93,7 @@ class RingExpert(GripperExpert):
         return lowest.mean(axis=0) + np.array([self.grasp_depth, 0.0, 0.0])
 
     def _pole(self) -> np.ndarray:
-        return self.env.data.body(POLE).xpos.copy()
+        return self.sim.body_pose(POLE)[0].copy()
 
     def _hanging_target(self, touch: np.ndarray, lowest_z: float) -> np.ndarray:
         """Pinch target that puts the hanging ring's lowest point at ``touch`` (xy) and height
@@ -165,7 +164,7 @@ class RingExpert(GripperExpert):
             if self.reached(target, 0.01):
                 self.phase = Phase.DESCEND
                 self.max_step = self.lower_speed * self.dt
-                self._hold = self._hanging_target(touch, TABLE_TOP_Z + TUBE_RADIUS - 0.002)
+                self._hold = self._hanging_target(touch, self.table_z() + TUBE_RADIUS - 0.002)
             return Waypoint(target, self._hang_rot, closed)
         if self.phase is Phase.DESCEND:
             if self.reached(self._hold, 0.004):

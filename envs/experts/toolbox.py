@@ -52,25 +52,24 @@ class ToolboxExpert(GripperExpert):
 
     def _grasp_rotation(self, current: Rotation) -> Rotation:
         """Fingers across the handle bar (perpendicular to its axis in the horizontal plane)."""
-        bar_axis = self.env.data.geom(HANDLE).xmat.reshape(3, 3)[:, 1]
+        bar_axis = self.sim.geom_pose(HANDLE)[1][:, 1]
         return top_down_rotation(np.cross([0.0, 0.0, 1.0], bar_axis), current)
 
     # ------------------------------------------------------------------ helpers
     def _over_mat(self, bottom_above_mat_top: float) -> np.ndarray:
         """Pinch target that puts the toolbox origin over the mat centre at the given height."""
-        data = self.env.data
-        held = self.measured_tool() - data.body(TOOLBOX).xpos
-        mat = data.body(MAT).xpos
+        held = self.measured_tool() - self.sim.body_pose(TOOLBOX)[0]
+        mat = self.sim.body_pose(MAT)[0]
         return mat + held + np.array([0.0, 0.0, MAT_TOP + bottom_above_mat_top])
 
     def _box_over_mat(self, tol: float) -> bool:
-        data = self.env.data
-        return bool(np.max(np.abs(data.body(TOOLBOX).xpos[:2] - data.body(MAT).xpos[:2])) < tol)
+        box, mat = self.sim.body_pose(TOOLBOX)[0], self.sim.body_pose(MAT)[0]
+        return bool(np.max(np.abs(box[:2] - mat[:2])) < tol)
 
     # ------------------------------------------------------------------ phases
     def waypoint(self) -> Waypoint:
         self._track_tool_speed()
-        grasp = self.env.data.geom(HANDLE).xpos - np.array([0.0, 0.0, self.grasp_depth])
+        grasp = self.sim.geom_pose(HANDLE)[0] - np.array([0.0, 0.0, self.grasp_depth])
         if self.phase is Phase.ABOVE:
             target = grasp + np.array([0.0, 0.0, self.approach_height])
             if self.reached(target, 0.01):
@@ -97,7 +96,7 @@ class ToolboxExpert(GripperExpert):
                 self._place = self._over_mat(self.place_height)
             return Waypoint(target, self._rot, self.closed_gripper)
         if self.phase is Phase.LOWER:
-            if self.env.task.is_success(self.env.model, self.env.data):
+            if self.env.task.is_success(self.sim):
                 self.phase = Phase.RELEASE
                 self._count = 0
                 self._release = self._ref_pos.copy()

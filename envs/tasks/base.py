@@ -1,37 +1,67 @@
 """The task interface: what a task adds to the scene, how its world varies, what success is.
 
 A task knows nothing about rendering, actions or gymnasium; :class:`rmb_lerobot.envs.base.RmbEnv`
-composes it with a robot and the shared scene (dm_control's composer split).
+composes it with a robot and a backend (dm_control's composer split). It is placed in the
+workspace it is given (:mod:`rmb_lerobot.envs.workspace`: the table's height and centre), not
+at module constants, so one task serves every robot whose scene has that table.
+
+Neutral and per-simulator parts:
+
+- simulator-neutral: the names and description, the worlds (:attr:`Task.world_offsets`,
+  :meth:`Task.world_offset`), episode variants, start poses per robot, and the success test
+  :meth:`Task.is_success`, which reads the world through
+  :class:`~rmb_lerobot.envs.backend.SceneState` (body/geom/site poses, joint positions,
+  deformables' points), whatever the backend;
+- MuJoCo-specific: :meth:`Task.build`, :meth:`Task.apply_world` and :meth:`Task.reset_objects`,
+  which the MuJoCo backend (:class:`~rmb_lerobot.envs.mujoco.backend.MujocoBackend`) calls with
+  itself (``.robot``, ``.robot_model``, ``.workspace``, and ``.model``/``.data`` once
+  compiled). Implementing them is what makes a task a MuJoCo task; another simulator's backend
+  calls its own builder hooks.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    import mujoco
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 NUM_WORLDS = 6
+StartPoses = Mapping[str, tuple[tuple[float, ...], ...]]
+"""Robot short name -> per-arm start joint angles."""
 
 
 class Task(ABC):
-    """One RMB task. Subclasses set the class attributes and implement the four methods.
+    """One RMB task. Subclasses set the class attributes and implement the hooks.
 
     ``world_offsets`` is RMB's table of six object shifts (``world_idx`` 0..5, metres, world
     frame); a random shift, uniform in ``[-scale, scale]`` on the axes where ``shift_axes`` is
-    1, is added on top when the env asks for one.
+    1, is added on top when the env asks for one. ``start_poses``: per robot short name, the
+    arm joint angles (one tuple per arm) the task starts from (RMB's per-env start poses);
+    robots not listed start at their own home pose.
     """
 
-    rmb_env_name: str  # RMB's environment class name without "Env", e.g. "MujocoUR5eInsert"
+    name: str  # short task name, e.g. "insert"; the registry derives every env name from it
     description: str  # language instruction for language-conditioned policies
     world_offsets: np.ndarray  # (NUM_WORLDS, 3)
     shift_axes: np.ndarray = np.array([1.0, 1.0, 0.0])
     max_episode_steps: int = 300
-    home_arm_qpos: tuple[float, ...] | None = None  # None: the robot's home pose
+    start_poses: ClassVar[StartPoses] = {}
     reset_options: tuple[str, ...] = ()  # extra ``env.reset`` options, see begin_episode
+
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        self.workspace = workspace
+
+    def start_pose(self, robot: str) -> tuple[tuple[float, ...], ...] | None:
+        """Per-arm start joint angles for robot ``robot``, or None for the robot's home."""
+        return self.start_poses.get(robot)
 
     def begin_episode(  # noqa: B027 - optional hook
         self, rng: np.random.Generator, options: Mapping[str, Any]
@@ -45,21 +75,26 @@ class Task(ABC):
         instruction of a language-conditioned task); empty for single-variant tasks."""
         return ()
 
+    # ------------------------------------------------------------------ MuJoCo hooks
     @abstractmethod
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
-        """Add the task's bodies, equalities and contact exclusions to the scene spec."""
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
+        """MuJoCo: add the task's bodies, equalities and contact exclusions to the scene spec.
+        ``sim`` is the backend being built: ``sim.robot`` (the record), ``sim.robot_model``
+        (its MuJoCo names) and ``sim.workspace`` are set, the model is not compiled yet."""
 
     @abstractmethod
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        """Move the task's objects by ``offset`` (3,) from their nominal placement."""
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        """MuJoCo: move the task's objects by ``offset`` (3,) from their nominal placement
+        (in ``sim.model``, right after ``mj_resetData``)."""
 
     @abstractmethod
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
-        """Set the objects' state at episode start (the robot is already at home, kinematics
-        computed)."""
+    def reset_objects(self, sim: MujocoBackend) -> None:
+        """MuJoCo: set the objects' state in ``sim.data`` at episode start (the robot is
+        already at home, kinematics computed)."""
 
+    # ------------------------------------------------------------------ neutral
     @abstractmethod
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+    def is_success(self, scene: SceneState) -> bool:
         """Whether the task's success criterion holds in the current state."""
 
     def world_offset(

@@ -16,12 +16,16 @@ and :class:`CabinetSlideTask` (door slid beyond 0.12 m). The cabinet moves in y 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, ClassVar
 
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 CABINET = "cabinet"  # the static body
 LID = "cabinet_lid"
@@ -138,38 +142,43 @@ class CabinetTask(Task):
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
     max_episode_steps = 400
     # RMB's MujocoUR5eCabinetEnv start pose.
-    home_arm_qpos = (np.pi, -0.4 * np.pi, -0.65 * np.pi, -0.2 * np.pi, np.pi / 2, np.pi / 2)
-    cabinet_nominal_pos = np.array([0.12, -0.05, TABLE_TOP_Z])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -0.4 * np.pi, -0.65 * np.pi, -0.2 * np.pi, np.pi / 2, np.pi / 2),)
+    }
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.cabinet_nominal_pos = workspace.table.on_top(0.12, -0.05)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         build_cabinet(spec, self.cabinet_nominal_pos)
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(CABINET).pos = self.cabinet_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(CABINET).pos = self.cabinet_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         for joint in (HINGE, SLIDE):
-            data.joint(joint).qpos[:] = 0.0
-            data.joint(joint).qvel[:] = 0.0
+            sim.data.joint(joint).qpos[:] = 0.0
+            sim.data.joint(joint).qvel[:] = 0.0
 
 
 class CabinetHingeTask(CabinetTask):
     """Open the lid beyond 120 degrees (RMB's ``target_task="hinge"``)."""
 
-    rmb_env_name = "MujocoUR5eCabinetHinge"
+    name = "cabinet_hinge"
     description = "Lift the cabinet's lid and flip it open."
     open_angle_deg = 120.0
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return bool(data.joint(HINGE).qpos[0] > np.deg2rad(self.open_angle_deg))
+    def is_success(self, scene: SceneState) -> bool:
+        return bool(scene.joint_position(HINGE)[0] > np.deg2rad(self.open_angle_deg))
 
 
 class CabinetSlideTask(CabinetTask):
     """Slide the door open beyond 0.12 m (RMB's ``target_task="slide"``)."""
 
-    rmb_env_name = "MujocoUR5eCabinetSlide"
+    name = "cabinet_slide"
     description = "Hook the gripper onto the handle and slide the cabinet door open."
     open_distance = 0.12
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return bool(data.joint(SLIDE).qpos[0] > self.open_distance)
+    def is_success(self, scene: SceneState) -> bool:
+        return bool(scene.joint_position(SLIDE)[0] > self.open_distance)

@@ -22,12 +22,16 @@ pole centres going +y (from the connector side towards the end).
 from __future__ import annotations
 
 import itertools
+from typing import TYPE_CHECKING, ClassVar
 
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 CABLE = "cable"  # the flex; vertex bodies are cable_<i>, twist joints cable_twist_<i>
 CABLE_ANCHOR = "cable_anchor"
@@ -81,20 +85,26 @@ class CableTask(Task):
     ~1.6x faster than 25 (measured: ~3,700 vs ~2,300 mj_step/s with the robot) and still bends
     smoothly around a pole."""
 
-    rmb_env_name = "MujocoUR5eCable"
+    name = "cable"
     description = "Route the cable between the two poles into an S shape."
     world_offsets = np.array([[x, 0.0, 0.0] for x in (-0.03, 0.0, 0.03, 0.06, 0.09, 0.12)])
     max_episode_steps = 600
     # RMB's MujocoUR5eCableEnv start pose (gripper pointing down, above the cable).
-    home_arm_qpos = (np.pi, -np.pi / 2, -0.75 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi / 2)
-    anchor_pos = np.array([-0.175, 0.2, TABLE_TOP_Z + CABLE_RADIUS])
-    poles_nominal_pos = np.array([-0.1, 0.1, TABLE_TOP_Z])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -np.pi / 2, -0.75 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi / 2),)
+    }
     num_vertices = 17
     young = 3e4  # Pa: bending stiffness E*I = 2.4e-4 N m^2, a limp rubber cable
     elastic_damping = 0.01  # s (Rayleigh)
     friction = 1.0
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        table = workspace.table
+        self.anchor_pos = table.on_top(-0.175, 0.2, CABLE_RADIUS)
+        self.poles_nominal_pos = table.on_top(-0.1, 0.1)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
         self._build_poles(spec)
         self._build_cable(spec)
@@ -187,23 +197,21 @@ class CableTask(Task):
             solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
         )
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(POLES).pos = self.poles_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(POLES).pos = self.poles_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         """Nothing to do: the cable starts straight and at rest in its build pose (``qpos0``),
         where ``mj_resetData`` already put it along with the rod's reference frames."""
 
-    def cable_points(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    def cable_points(self, scene: SceneState) -> np.ndarray:
         """World positions of the cable's vertices, connector first (n, 3)."""
-        flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CABLE)
-        start, count = int(model.flex_vertadr[flex]), int(model.flex_vertnum[flex])
-        return data.flexvert_xpos[start : start + count].copy()
+        return scene.points(CABLE)
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+    def is_success(self, scene: SceneState) -> bool:
         return s_shape_routed(
-            self.cable_points(model, data),
-            data.body(CABLE_END).xpos,
-            data.geom(POLE1).xpos,
-            data.geom(POLE2).xpos,
+            self.cable_points(scene),
+            scene.body_pose(CABLE_END)[0],
+            scene.geom_pose(POLE1)[0],
+            scene.geom_pose(POLE2)[0],
         )

@@ -36,10 +36,16 @@ minus 0.001 m (it was not pulled off towards the robot).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, ClassVar
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 CLOTH = "cloth"  # the flex; its vertex bodies are cloth_<i>, i = row * CLOTH_COLUMNS + column
 BOARD = "board"  # the body and its box geom
@@ -70,6 +76,9 @@ CONTACT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 # slower) or CG, which never factorises the Hessian. CG costs ~1.3 ms more per env step in
 # expert episodes (RESULTS.md). Back to Newton once the project is on MuJoCo >= 4.0.1.
 SOLVER = mujoco.mjtSolver.mjSOL_CG
+# RMB's cloth body origin relative to the board centre (from its world numbers, in the order
+# RMB's file gives them: cloth origin (0.11, 0.003, 1.05) minus board (0.15, -0.065, 1.2)).
+CLOTH_FROM_BOARD = np.array([0.11, 0.003, 1.05]) - np.array([0.15, -0.065, 1.2])
 SUCCESS_X_MARGIN = 0.001  # RMB: cloth x must exceed the board's smallest corner x minus this
 SUCCESS_Z_MARGIN = 0.092  # RMB: cloth z must exceed the board's lowest corner z minus this
 
@@ -91,23 +100,29 @@ def cloth_on_board(points: np.ndarray, corners: np.ndarray) -> bool:
 class ClothTask(Task):
     """The cloth is RMB's 9 x 7 grid (63 vertices, 54 free: 162 dofs)."""
 
-    rmb_env_name = "MujocoUR5eCloth"
+    name = "cloth"
     description = "Lift the hanging cloth and roll it up onto the board."
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.12, -0.08, -0.04, 0.0, 0.04, 0.08)])
     shift_axes = np.array([1.0, 1.0, 1.0])
     max_episode_steps = 400
     # RMB's MujocoUR5eClothEnv start pose.
-    home_arm_qpos = (1.2 * np.pi, -np.pi / 2, -0.85 * np.pi, -0.65 * np.pi, -0.5 * np.pi, 0.0)
-    board_nominal_pos = np.array([0.15, -0.065, 1.2])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((1.2 * np.pi, -np.pi / 2, -0.85 * np.pi, -0.65 * np.pi, -0.5 * np.pi, 0.0),)
+    }
     board_yaw = -np.pi / 4
-    cloth_centre = np.array([0.11, 0.003, 1.05])  # RMB's cloth body origin (world, nominal)
     friction = 1.0
+
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        # RMB's board centre, 0.385 m above its table top at (0.15, -0.065) (world 1.2 m).
+        self.board_nominal_pos = workspace.table.on_top(0.15, -0.065, 0.385)
+        self.cloth_centre = self.board_nominal_pos + CLOTH_FROM_BOARD
 
     @property
     def board_quat(self) -> np.ndarray:
         return np.array([np.cos(self.board_yaw / 2), 0.0, 0.0, np.sin(self.board_yaw / 2)])
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         board = spec.worldbody.add_body(
             name=BOARD, pos=list(self.board_nominal_pos), quat=list(self.board_quat)
         )
@@ -124,7 +139,7 @@ class ClothTask(Task):
         """The flex grid in the board frame: grid x (rows) points down, grid y along the
         board's long side, so point ``row * CLOTH_COLUMNS + column`` sits in row ``row``."""
         yaw = self.board_yaw
-        offset = self.cloth_centre - self.board_nominal_pos
+        offset = CLOTH_FROM_BOARD
         across = np.array([np.cos(yaw), np.sin(yaw), 0.0])  # board x axis in the world
         along = np.array([-np.sin(yaw), np.cos(yaw), 0.0])  # board y axis in the world
         centre = [offset @ across, offset @ along, offset[2]]
@@ -158,22 +173,20 @@ class ClothTask(Task):
         spec.option.solver = SOLVER
         flex.rgba = [0.85, 0.35, 0.3, 1.0]
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(BOARD).pos = self.board_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(BOARD).pos = self.board_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         """Nothing to do: the cloth hangs flat and at rest in its build pose (``qpos0``, relative
         to the board), where ``mj_resetData`` already put it."""
 
-    def cloth_points(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    def cloth_points(self, scene: SceneState) -> np.ndarray:
         """World positions of the cloth's grid points (rows top to bottom) (63, 3)."""
-        flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
-        start, count = int(model.flex_vertadr[flex]), int(model.flex_vertnum[flex])
-        return data.flexvert_xpos[start : start + count].copy()
+        return scene.points(CLOTH)
 
-    def board_corners(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
-        geom = data.geom(BOARD)
-        return board_corners(geom.xpos, geom.xmat, model.geom(BOARD).size)
+    def board_corners(self, scene: SceneState) -> np.ndarray:
+        pos, rot = scene.geom_pose(BOARD)
+        return board_corners(pos, rot, np.array(BOARD_HALF_SIZE))
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return cloth_on_board(self.cloth_points(model, data), self.board_corners(model, data))
+    def is_success(self, scene: SceneState) -> bool:
+        return cloth_on_board(self.cloth_points(scene), self.board_corners(scene))

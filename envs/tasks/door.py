@@ -8,11 +8,16 @@ across the six worlds. Success: the hinge angle is at most -45 degrees.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, ClassVar
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 DOOR = "door"  # the static frame body and the hinge joint
 DOOR_LEAF = "door_leaf"
@@ -24,16 +29,21 @@ HANDLE_BAR_RADIUS = 0.0075
 
 
 class DoorTask(Task):
-    rmb_env_name = "MujocoUR5eDoor"
+    name = "door"
     description = "Grasp the door handle and open the door."
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
     max_episode_steps = 400
     # RMB's MujocoUR5eDoorEnv start pose: gripper tilted towards the door.
-    home_arm_qpos = (np.pi, -0.4 * np.pi, -0.65 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi / 2)
-    door_nominal_pos = np.array([0.15, -0.08, TABLE_TOP_Z])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -0.4 * np.pi, -0.65 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi / 2),)
+    }
     open_angle_deg = -45.0
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.door_nominal_pos = workspace.table.on_top(0.15, -0.08)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         cylinder, box = mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_BOX
         frame = spec.worldbody.add_body(name=DOOR, pos=list(self.door_nominal_pos))
         for y in (HINGE_Y, -HINGE_Y):
@@ -78,12 +88,12 @@ class DoorTask(Task):
         # and its child, so without this the hinge jams.
         spec.add_exclude(bodyname1=DOOR, bodyname2=DOOR_LEAF)
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(DOOR).pos = self.door_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(DOOR).pos = self.door_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
-        data.joint(DOOR).qpos[:] = 0.0
-        data.joint(DOOR).qvel[:] = 0.0
+    def reset_objects(self, sim: MujocoBackend) -> None:
+        sim.data.joint(DOOR).qpos[:] = 0.0
+        sim.data.joint(DOOR).qvel[:] = 0.0
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return bool(data.joint(DOOR).qpos[0] <= np.deg2rad(self.open_angle_deg))
+    def is_success(self, scene: SceneState) -> bool:
+        return bool(scene.joint_position(DOOR)[0] <= np.deg2rad(self.open_angle_deg))

@@ -10,11 +10,16 @@ within 0.012 m of the hole's axis in xy, its lower end is at most 0.01 m above t
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 PEG = "peg"
 HOLE = "hole"
@@ -27,16 +32,19 @@ PEG_OFFSET_FROM_MOUNT = 0.163
 
 
 class InsertTask(Task):
-    rmb_env_name = "MujocoUR5eInsert"
+    name = "insert"
     description = "Insert the square peg into the hole."
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
     max_episode_steps = 300
-    hole_nominal_pos = np.array([-0.08, -0.08, TABLE_TOP_Z])
     xy_tolerance = 0.012
     depth_tolerance = 0.01
     max_tilt_deg = 10.0
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.hole_nominal_pos = workspace.table.on_top(-0.08, -0.08)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         peg = spec.worldbody.add_body(name=PEG, pos=[0.0, 0.0, 1.0])
         peg.add_freejoint(name=PEG)
         half = [PEG_HALF_WIDTH, PEG_HALF_WIDTH, PEG_HALF_LENGTH / 2]
@@ -61,33 +69,33 @@ class InsertTask(Task):
                 pos=[px, py, HOLE_DEPTH / 2],
                 rgba=[0.1, 0.8, 0.5, 1.0],
             )
+        (arm,), (arm_model,) = sim.robot.arms, sim.robot_model.arms  # one-arm task
         spec.add_equality(
             name=PEG,
             type=mujoco.mjtEq.mjEQ_WELD,
             objtype=mujoco.mjtObj.mjOBJ_BODY,
-            name1=robot.ft_body,
+            name1=arm.hand_frame,
             name2=PEG,
             data=[0, 0, 0, 0, 0, PEG_OFFSET_FROM_MOUNT, 1, 0, 0, 0, 1, 0],
         )
-        for body in spec.body(robot.arm_base_body).find_all(mujoco.mjtObj.mjOBJ_BODY):
+        for body in spec.body(arm_model.base_body).find_all(mujoco.mjtObj.mjOBJ_BODY):
             spec.add_exclude(bodyname1=body.name, bodyname2=PEG)
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(HOLE).pos = self.hole_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(HOLE).pos = self.hole_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
-        mount = data.body(robot.ft_body)
+    def reset_objects(self, sim: MujocoBackend) -> None:
+        mount = sim.data.body(sim.robot.arms[0].hand_frame)
         mat = mount.xmat.reshape(3, 3)
-        qpos = data.joint(PEG).qpos
+        qpos = sim.data.joint(PEG).qpos
         qpos[:3] = mount.xpos + mat[:, 2] * PEG_OFFSET_FROM_MOUNT
         qpos[3:] = mount.xquat
-        data.joint(PEG).qvel[:] = 0.0
+        sim.data.joint(PEG).qvel[:] = 0.0
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        peg = data.body(PEG)
-        hole_pos = data.body(HOLE).xpos
-        axis = peg.xmat.reshape(3, 3)[:, 2]
-        centre = peg.xpos
+    def is_success(self, scene: SceneState) -> bool:
+        centre, rot = scene.body_pose(PEG)
+        hole_pos, _ = scene.body_pose(HOLE)
+        axis = rot[:, 2]
         xy_ok = np.linalg.norm(centre[:2] - hole_pos[:2]) <= self.xy_tolerance
         lower_end_z = centre[2] - PEG_HALF_LENGTH * abs(axis[2])
         depth_ok = lower_end_z <= hole_pos[2] + self.depth_tolerance

@@ -26,11 +26,16 @@ the container below the top of its walls, not while it rests on a rim or is held
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, ClassVar
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 SOURCE = "source_case"
 GOAL = "goal_case"
@@ -123,23 +128,31 @@ class ParticleTask(Task):
     """``particle_grid`` (along x, y; layers) particles ``particle_spacing`` apart (centre to
     centre), the block's centre ``particle_block_offset`` (x, y) from the source's centre."""
 
-    rmb_env_name = "MujocoUR5eParticle"
+    name = "particle"
     description = "Scoop the particles from the source container into the goal container."
     world_offsets = np.array([[0.0, y, 0.0] for y in (0.0, 0.04, 0.08, 0.12, 0.16, 0.20)])
     max_episode_steps = 700
     # RMB's MujocoUR5eParticleEnv start pose (the Cable pose with the wrist turned by pi / 2).
-    home_arm_qpos = (np.pi, -np.pi / 2, -0.75 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi)
-    source_nominal_pos = np.array([-0.05, 0.1, TABLE_TOP_Z - CASE_CENTRE_BELOW_TABLE])
-    goal_pos = np.array([0.05, -0.2, TABLE_TOP_Z - CASE_CENTRE_BELOW_TABLE])
-    scoop_pos = np.array([-0.15, -0.15, TABLE_TOP_Z + SCOOP_PLATE_HALF[2]])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -np.pi / 2, -0.75 * np.pi, -0.25 * np.pi, np.pi / 2, np.pi),)
+    }
     particle_grid = (5, 6, 1)
     particle_spacing = 0.0205  # a little over a diameter: the particles start apart, at rest
     particle_block_offset = np.array([0.06, 0.0])
     particle_friction = 0.5
 
-    def __init__(self) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        table = workspace.table
+        self.source_nominal_pos = table.on_top(-0.05, 0.1, -CASE_CENTRE_BELOW_TABLE)
+        self.goal_pos = table.on_top(0.05, -0.2, -CASE_CENTRE_BELOW_TABLE)
+        self.scoop_pos = table.on_top(-0.15, -0.15, SCOOP_PLATE_HALF[2])
         # (id(model), particle body ids, their first qpos and dof addresses), on first use.
         self._particle_ids: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @property
+    def particle_names(self) -> tuple[str, ...]:
+        return tuple(f"{PARTICLE}_{i}" for i in range(self.num_particles))
 
     @property
     def num_particles(self) -> int:
@@ -152,10 +165,12 @@ class ParticleTask(Task):
         xs, ys = ((np.arange(n) - (n - 1) / 2) * s for n in (nx, ny))
         zs = PARTICLE_RADIUS + np.arange(nz) * s
         grid = np.array([(x, y, z) for z in zs for x in xs for y in ys])
-        floor = np.array([*(source_pos[:2] + self.particle_block_offset), TABLE_TOP_Z])
+        floor = np.array(
+            [*(source_pos[:2] + self.particle_block_offset), self.workspace.table.top_z]
+        )
         return floor + grid
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         # Resting particles (and the scoop) sleep until something awake touches them.
         spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         # Coarser sphere meshes (MuJoCo's default 28 x 16 makes the 30 particles cost as many
@@ -179,15 +194,14 @@ class ParticleTask(Task):
                 friction=[self.particle_friction, 0.005, 0.0001],
             )
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(SOURCE).pos = self.source_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(SOURCE).pos = self.source_nominal_pos + offset
 
     def _ids(self, model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Particle body ids and the qpos and dof addresses of their x slide joints (the y
         and z joints follow)."""
         if self._particle_ids is None or self._particle_ids[0] != id(model):
-            names = (f"{PARTICLE}_{i}" for i in range(self.num_particles))
-            bodies = np.array([model.body(name).id for name in names])
+            bodies = np.array([model.body(name).id for name in self.particle_names])
             joints = model.body_jntadr[bodies]
             self._particle_ids = (
                 id(model),
@@ -197,9 +211,10 @@ class ParticleTask(Task):
             )
         return self._particle_ids[1:]
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         """The scoop on the table at its place, the particles at rest in their block, moved
         with the source container (their slide joints hold the world's shift)."""
+        model, data = sim.model, sim.data
         source = model.body(SOURCE)
         data.mocap_pos[source.mocapid[0]] = source.pos
         scoop = data.joint(SCOOP)
@@ -212,10 +227,10 @@ class ParticleTask(Task):
             data.qpos[qpos + axis] = shift[axis]
             data.qvel[dofs + axis] = 0.0
 
-    def particle_positions(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    def particle_positions(self, scene: SceneState) -> np.ndarray:
         """World positions of the particle centres (n, 3)."""
-        return data.xpos[self._ids(model)[0]].copy()
+        return scene.body_positions(self.particle_names)
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        goal = data.body(GOAL).xpos
-        return count_in_goal(self.particle_positions(model, data), goal) >= SUCCESS_COUNT
+    def is_success(self, scene: SceneState) -> bool:
+        goal, _ = scene.body_pose(GOAL)
+        return count_in_goal(self.particle_positions(scene), goal) >= SUCCESS_COUNT

@@ -32,13 +32,16 @@ from __future__ import annotations
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 BOX = mujoco.mjtGeom.mjGEOM_BOX
 CYLINDER = mujoco.mjtGeom.mjGEOM_CYLINDER
@@ -426,17 +429,21 @@ def layout_is_clear(positions: np.ndarray, objects: Sequence[PickObject] = OBJEC
 class PickTask(Task):
     """Language-conditioned pick-and-place of one of nine objects into one of two baskets."""
 
-    rmb_env_name = "MujocoUR5ePick"
+    name = "pick"
     description = "Put the named object in the named basket."  # replaced at every reset
     # RMB's basket shifts (x) of the six worlds.
     world_offsets = np.array([[x, 0.0, 0.0] for x in (-0.09, -0.06, -0.03, 0.0, 0.03, 0.06)])
     max_episode_steps = 500
     # RMB's MujocoUR5ePickEnv start pose (the Toolbox one).
-    home_arm_qpos = (np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi)
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi),)
+    }
     reset_options = ("instruction",)
     rest_speed = 0.05  # m/s: slower counts as resting
 
-    def __init__(self) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.table_z = workspace.table.top_z
         self.objects = OBJECTS
         self.baskets = BASKETS
         self.target_object = OBJECTS[0]
@@ -487,10 +494,10 @@ class PickTask(Task):
         return offset
 
     # ------------------------------------------------------------------ scene
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         for obj in self.objects:
             body = spec.worldbody.add_body(
-                name=obj.body, pos=[*obj.slot, TABLE_TOP_Z], quat=_yaw_quat(obj.yaw).tolist()
+                name=obj.body, pos=[*obj.slot, self.table_z], quat=_yaw_quat(obj.yaw).tolist()
             )
             body.add_freejoint(name=obj.body)
             density = obj.mass / sum(g.volume() for g in obj.geoms if g.collide)
@@ -510,9 +517,8 @@ class PickTask(Task):
         for basket in self.baskets:
             self._build_basket(spec, basket)
 
-    @staticmethod
-    def _build_basket(spec: mujoco.MjSpec, basket: Basket) -> None:
-        body = spec.worldbody.add_body(name=basket.body, pos=[*basket.pos, TABLE_TOP_Z])
+    def _build_basket(self, spec: mujoco.MjSpec, basket: Basket) -> None:
+        body = spec.worldbody.add_body(name=basket.body, pos=[*basket.pos, self.table_z])
         (ix, iy), w, h = basket.inner, basket.wall, basket.height
         rgba = list(basket.rgba)
         body.add_geom(
@@ -528,13 +534,15 @@ class PickTask(Task):
         for sy in (-1, 1):
             body.add_geom(type=BOX, size=[ix, w, h / 2], pos=[0, sy * (iy + w), h / 2], rgba=rgba)
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        model = sim.model
         for basket in self.baskets:
-            model.body(basket.body).pos = np.array([*basket.pos, TABLE_TOP_Z]) + offset
+            model.body(basket.body).pos = np.array([*basket.pos, self.table_z]) + offset
         for obj, xy in zip(self.objects, self.nominal_positions + self.object_shifts, strict=True):
-            model.body(obj.body).pos = [*xy, TABLE_TOP_Z]
+            model.body(obj.body).pos = [*xy, self.table_z]
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
+        model, data = sim.model, sim.data
         for obj in self.objects:
             joint = data.joint(obj.body)
             joint.qpos[:3] = model.body(obj.body).pos
@@ -542,12 +550,12 @@ class PickTask(Task):
             joint.qvel[:] = 0.0
 
     # ------------------------------------------------------------------ success
-    def object_in_basket(self, data: mujoco.MjData, obj: PickObject, basket: Basket) -> bool:
+    def object_in_basket(self, scene: SceneState, obj: PickObject, basket: Basket) -> bool:
         """Whether ``obj`` rests inside ``basket`` (origin within the walls, below the rim)."""
-        rel = data.body(obj.body).xpos - data.body(basket.body).xpos
+        rel = scene.body_pose(obj.body)[0] - scene.body_pose(basket.body)[0]
         inside = np.all(np.abs(rel[:2]) < basket.inner) and -0.01 < rel[2] < basket.height
-        speed = np.linalg.norm(data.joint(obj.body).qvel[:3])
+        speed = np.linalg.norm(scene.joint_velocity(obj.body)[:3])
         return bool(inside and speed < self.rest_speed)
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return self.object_in_basket(data, self.target_object, self.target_basket)
+    def is_success(self, scene: SceneState) -> bool:
+        return self.object_in_basket(scene, self.target_object, self.target_basket)

@@ -33,11 +33,16 @@ the one resting on the hook, far from where the ring is gripped.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, ClassVar
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 RING = "ring"  # the flex; vertex bodies ring_<i>, twist joints ring_twist_<e> and ring_twist
 SEAM = "ring_seam"  # the equality closing the loop
@@ -52,7 +57,8 @@ RING_MASS = 0.13
 PEG_RADIUS = 0.01
 PEG_HALF_LENGTH = 0.02
 PEG_Y = (-0.13, -0.17)
-HOOK_POS = np.array([0.1, -0.15, TABLE_TOP_Z + 0.23])  # between the pegs, on their axes
+HOOK_XY = (0.1, -0.15)  # between the pegs, on their axes
+HOOK_HEIGHT = 0.23  # above the table top
 POLE_RADIUS = 0.01
 POLE_HEIGHT = 0.06
 # RMB's success height: 0.08 m above its pole body origin, which lies 0.02 m below the pole's
@@ -101,7 +107,7 @@ def hanging_centre_height(num_segments: int = NUM_SEGMENTS) -> float:
     direction = (nxt - top) / np.linalg.norm(nxt - top)
     normal = np.array([-direction[1], direction[0]])
     normal *= np.sign(normal[1])  # the segment's upper side
-    peg = np.array([np.sign(nxt[0]) * abs(PEG_Y[0] - HOOK_POS[1]), 0.0])  # under that segment
+    peg = np.array([np.sign(nxt[0]) * abs(PEG_Y[0] - HOOK_XY[1]), 0.0])  # under that segment
     # With the centre c above the peg: (top + (0, c) - peg) . normal = clearance.
     clearance = TUBE_RADIUS + PEG_RADIUS
     return float((clearance - (top - peg) @ normal) / normal[1])
@@ -111,7 +117,7 @@ class RingTask(Task):
     """The ring is an elastic rod (Young's modulus ``young``, a stiff plastic): it keeps its
     shape when held at one point, bends under a squeeze."""
 
-    rmb_env_name = "MujocoUR5eRing"
+    name = "ring"
     description = "Pick up the ring hanging on the hook and place it onto the pole."
     world_offsets = np.array(
         [
@@ -125,22 +131,28 @@ class RingTask(Task):
     )
     max_episode_steps = 500
     # RMB's MujocoUR5eRingEnv start pose: the hand points along +x at the hook's height.
-    home_arm_qpos = (np.pi, -np.pi / 2, -0.75 * np.pi, -0.75 * np.pi, -0.5 * np.pi, 0.0)
-    pole_nominal_pos = np.array([0.0, 0.0, TABLE_TOP_Z])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -np.pi / 2, -0.75 * np.pi, -0.75 * np.pi, -0.5 * np.pi, 0.0),)
+    }
     num_segments = NUM_SEGMENTS
     young = 1e7  # Pa: bending stiffness E*I = 0.08 N m^2
     elastic_damping = 0.005  # s (Rayleigh)
     friction = 1.0
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.hook_pos = workspace.table.on_top(*HOOK_XY, HOOK_HEIGHT)
+        self.pole_nominal_pos = workspace.table.on_top(0.0, 0.0)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
-        hook = spec.worldbody.add_body(name=HOOK, pos=list(HOOK_POS))
+        hook = spec.worldbody.add_body(name=HOOK, pos=list(self.hook_pos))
         for name, y in ((PEG1, PEG_Y[0]), (PEG2, PEG_Y[1])):
             hook.add_geom(
                 name=name,
                 type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                 size=[PEG_RADIUS, PEG_HALF_LENGTH, 0],
-                pos=[0, y - HOOK_POS[1], 0],
+                pos=[0, y - self.hook_pos[1], 0],
                 quat=[np.cos(np.pi / 4), 0, np.sin(np.pi / 4), 0],  # axis along x
                 rgba=[0.8, 0.1, 0.5, 1.0],
             )
@@ -156,7 +168,7 @@ class RingTask(Task):
     def ring_nominal_points(self) -> np.ndarray:
         """The ring's vertices resting on the hook (the compiled pose), top vertex first."""
         angles = ring_vertex_angles(self.num_segments)
-        centre = HOOK_POS + np.array([0.0, 0.0, hanging_centre_height(self.num_segments)])
+        centre = self.hook_pos + np.array([0.0, 0.0, hanging_centre_height(self.num_segments)])
         circle = RING_RADIUS * np.stack([np.zeros_like(angles), np.cos(angles), np.sin(angles)])
         return centre + circle.T
 
@@ -209,18 +221,16 @@ class RingTask(Task):
             solimp=solimp,
         )
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(POLE).pos = self.pole_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(POLE).pos = self.pole_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         """Nothing to do: the ring starts at rest on the hook in its build pose (``qpos0``),
         where ``mj_resetData`` already put it along with the rod's reference frames."""
 
-    def ring_points(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    def ring_points(self, scene: SceneState) -> np.ndarray:
         """World positions of the ring's ``num_segments`` distinct vertices (n, 3)."""
-        flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, RING)
-        start = int(model.flex_vertadr[flex])
-        return data.flexvert_xpos[start : start + self.num_segments].copy()
+        return scene.points(RING)[: self.num_segments]
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        return ring_on_pole(self.ring_points(model, data), data.body(POLE).xpos)
+    def is_success(self, scene: SceneState) -> bool:
+        return ring_on_pole(self.ring_points(scene), scene.body_pose(POLE)[0])

@@ -16,11 +16,16 @@ rests on the mat (its bottom is then 3 mm above the mat origin).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, ClassVar
+
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
-from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+
+if TYPE_CHECKING:
+    from rmb_lerobot.envs.backend import SceneState
+    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
 TOOLBOX = "toolbox"  # the body and its free joint
 MAT = "mat"
@@ -37,19 +42,24 @@ MAT_TOP = 0.003  # top of the upper layer above the mat origin
 
 
 class ToolboxTask(Task):
-    rmb_env_name = "MujocoUR5eToolbox"
+    name = "toolbox"
     description = "Grasp the handle of the toolbox and move it onto the mat."
     world_offsets = np.array([[0.0, y, 0.0] for y in (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)])
     max_episode_steps = 400
     # RMB's MujocoUR5eToolboxEnv start pose: the Insert pose with the wrist turned by pi / 2.
-    home_arm_qpos = (np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi)
-    toolbox_nominal_pos = np.array([0.0, -0.2, TABLE_TOP_Z])
+    start_poses: ClassVar[StartPoses] = {
+        "ur5e": ((np.pi, -np.pi / 2, -0.55 * np.pi, -0.45 * np.pi, np.pi / 2, np.pi),)
+    }
     toolbox_quat = np.array([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)])  # yaw 90 deg
-    mat_pos = np.array([0.0, 0.2, TABLE_TOP_Z])
     xy_tolerance = 0.03
     z_tolerance = 0.005
 
-    def build(self, spec: mujoco.MjSpec, robot: RobotSpec) -> None:
+    def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
+        super().__init__(workspace)
+        self.toolbox_nominal_pos = workspace.table.on_top(0.0, -0.2)
+        self.mat_pos = workspace.table.on_top(0.0, 0.2)
+
+    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         box = mujoco.mjtGeom.mjGEOM_BOX
         toolbox = spec.worldbody.add_body(
             name=TOOLBOX, pos=list(self.toolbox_nominal_pos), quat=list(self.toolbox_quat)
@@ -80,18 +90,18 @@ class ToolboxTask(Task):
                 type=box, size=[half, half, MAT_HALF_THICKNESS], pos=[0, 0, z], rgba=list(rgba)
             )
 
-    def apply_world(self, model: mujoco.MjModel, offset: np.ndarray) -> None:
-        model.body(TOOLBOX).pos = self.toolbox_nominal_pos + offset
+    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
+        sim.model.body(TOOLBOX).pos = self.toolbox_nominal_pos + offset
 
-    def reset_objects(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotSpec) -> None:
+    def reset_objects(self, sim: MujocoBackend) -> None:
         # A free body's pose lives in its joint, so copy the world's placement there.
-        qpos = data.joint(TOOLBOX).qpos
-        qpos[:3] = model.body(TOOLBOX).pos
+        qpos = sim.data.joint(TOOLBOX).qpos
+        qpos[:3] = sim.model.body(TOOLBOX).pos
         qpos[3:] = self.toolbox_quat
-        data.joint(TOOLBOX).qvel[:] = 0.0
+        sim.data.joint(TOOLBOX).qvel[:] = 0.0
 
-    def is_success(self, model: mujoco.MjModel, data: mujoco.MjData) -> bool:
-        toolbox = data.body(TOOLBOX).xpos
-        mat = data.body(MAT).xpos
+    def is_success(self, scene: SceneState) -> bool:
+        toolbox, _ = scene.body_pose(TOOLBOX)
+        mat, _ = scene.body_pose(MAT)
         xy_ok = np.max(np.abs(toolbox[:2] - mat[:2])) < self.xy_tolerance
         return bool(xy_ok and toolbox[2] < mat[2] + self.z_tolerance)

@@ -44,8 +44,8 @@ def _assert_not_diverged(env: RmbEnv) -> None:
     """The state is finite and MuJoCo did not hit a divergent acceleration on the way: MuJoCo
     then resets the state itself (finite again, the divergence hidden) and only counts it in
     ``data.warning``, which ``env.reset`` clears."""
-    assert np.all(np.isfinite(env.data.qpos)) and np.all(np.isfinite(env.data.qvel))
-    diverged = env.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+    assert np.all(np.isfinite(env.sim.data.qpos)) and np.all(np.isfinite(env.sim.data.qvel))
+    diverged = env.sim.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
     assert diverged == 0, f"MuJoCo reset a divergent state {diverged} time(s)"
 
 
@@ -99,7 +99,7 @@ def _random_rollout(env: RmbEnv, seed: int, steps: int = 30) -> np.ndarray:
         action = env.home_command + rng.normal(0.0, 0.05, 7)
         action[-1] = 255.0 * rng.random()
         env.step(action.astype(np.float32))
-    return env.data.qpos.copy()
+    return env.sim.data.qpos.copy()
 
 
 @pytest.fixture

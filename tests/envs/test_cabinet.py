@@ -41,10 +41,10 @@ def cabinet_env(request):
 def _set_joints(env: RmbEnv, hinge: float, slide: float) -> bool:
     """Put the lid and the door at the given positions; return the task's success."""
     env.reset(seed=0)
-    env.data.joint(HINGE).qpos[0] = hinge
-    env.data.joint(SLIDE).qpos[0] = slide
-    mujoco.mj_kinematics(env.model, env.data)
-    return env.task.is_success(env.model, env.data)
+    env.sim.data.joint(HINGE).qpos[0] = hinge
+    env.sim.data.joint(SLIDE).qpos[0] = slide
+    mujoco.mj_kinematics(env.sim.model, env.sim.data)
+    return env.task.is_success(env.sim)
 
 
 @pytest.mark.parametrize(
@@ -66,36 +66,38 @@ def test_slide_success_criterion(slide_env, hinge_deg, slide, expected):
 @pytest.mark.parametrize("world_idx", range(6))
 def test_worlds_shift_the_cabinet_as_rmb(cabinet_env, world_idx):
     _, info = cabinet_env.reset(seed=0, options={"world_idx": world_idx, "random_shift": 0.0})
-    expected = CabinetTask.cabinet_nominal_pos + np.array([0.0, RMB_Y_OFFSETS[world_idx], 0.0])
-    assert cabinet_env.data.body(CABINET).xpos == pytest.approx(expected)
-    assert cabinet_env.data.joint(HINGE).qpos[0] == 0.0
-    assert cabinet_env.data.joint(SLIDE).qpos[0] == 0.0
+    expected = CabinetHingeTask().cabinet_nominal_pos + np.array(
+        [0.0, RMB_Y_OFFSETS[world_idx], 0.0]
+    )
+    assert cabinet_env.sim.data.body(CABINET).xpos == pytest.approx(expected)
+    assert cabinet_env.sim.data.joint(HINGE).qpos[0] == 0.0
+    assert cabinet_env.sim.data.joint(SLIDE).qpos[0] == 0.0
     assert info["is_success"] is False
 
 
 def test_random_shift_stays_on_the_table_and_is_seeded(cabinet_env):
     options = {"world_idx": 2, "random_shift": 0.03}
     cabinet_env.reset(seed=7, options=options)
-    first = cabinet_env.data.body(CABINET).xpos.copy()
-    shift = first - CabinetTask.cabinet_nominal_pos - CabinetTask.world_offsets[2]
+    first = cabinet_env.sim.data.body(CABINET).xpos.copy()
+    shift = first - CabinetHingeTask().cabinet_nominal_pos - CabinetTask.world_offsets[2]
     assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(shift[:2] != 0.0)
     assert shift[2] == 0.0
     cabinet_env.reset(seed=7, options=options)
-    assert cabinet_env.data.body(CABINET).xpos == pytest.approx(first)
+    assert cabinet_env.sim.data.body(CABINET).xpos == pytest.approx(first)
 
 
 def test_start_pose_is_rmbs(cabinet_env):
     obs, _ = cabinet_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(CabinetTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(CabinetTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 def test_closed_cabinet_stays_closed_and_finite(cabinet_env):
     obs, _ = cabinet_env.reset(seed=1, options={"world_idx": 5, "random_shift": 0.03})
     for _ in range(60):
         obs, *_ = cabinet_env.step(cabinet_env.home_command.astype(np.float32))
-    assert np.all(np.isfinite(cabinet_env.data.qpos)) and np.all(np.isfinite(obs["agent_pos"]))
-    assert abs(cabinet_env.data.joint(HINGE).qpos[0]) < np.deg2rad(1.0)
-    assert abs(cabinet_env.data.joint(SLIDE).qpos[0]) < 1e-3
+    assert np.all(np.isfinite(cabinet_env.sim.data.qpos)) and np.all(np.isfinite(obs["agent_pos"]))
+    assert abs(cabinet_env.sim.data.joint(HINGE).qpos[0]) < np.deg2rad(1.0)
+    assert abs(cabinet_env.sim.data.joint(SLIDE).qpos[0]) < 1e-3
 
 
 def test_catalog_lists_both_variants():
@@ -103,8 +105,7 @@ def test_catalog_lists_both_variants():
     assert TASKS["cabinet_slide"] is CabinetSlideTask
     assert EXPERTS["cabinet_hinge"] is CabinetHingeExpert
     assert EXPERTS["cabinet_slide"] is CabinetSlideExpert
-    assert CabinetHingeTask.rmb_env_name == "MujocoUR5eCabinetHinge"
-    assert CabinetSlideTask.rmb_env_name == "MujocoUR5eCabinetSlide"
+    assert (CabinetHingeTask.name, CabinetSlideTask.name) == ("cabinet_hinge", "cabinet_slide")
 
 
 def _run_expert(env: RmbEnv, expert, world_idx: int, seed: int) -> dict:
@@ -113,7 +114,7 @@ def _run_expert(env: RmbEnv, expert, world_idx: int, seed: int) -> dict:
     info = {"is_success": False}
     for _ in range(env.task.max_episode_steps):
         obs, _, terminated, _, info = env.step(expert(obs))
-        assert np.all(np.isfinite(env.data.qpos)), "simulation diverged"
+        assert np.all(np.isfinite(env.sim.data.qpos)), "simulation diverged"
         if terminated:
             break
     return info
@@ -128,7 +129,7 @@ def test_expert_opens_the_cabinet(request, env_fixture, expert_class, joint):
     expert = expert_class(env)
     for world in (0, 3, 5):
         info = _run_expert(env, expert, world, seed=world)
-        assert info["is_success"], f"world {world}: {joint} at {env.data.joint(joint).qpos}"
+        assert info["is_success"], f"world {world}: {joint} at {env.sim.data.joint(joint).qpos}"
 
 
 @pytest.mark.parametrize(

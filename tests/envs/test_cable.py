@@ -20,10 +20,10 @@ from rmb_lerobot.envs.tasks.cable import (
     s_shape_routed,
 )
 
-REST_Z = CableTask.anchor_pos[2]  # cable centre line lying on the table
-P1 = CableTask.poles_nominal_pos + np.array([0.0, 0.0, POLE_HALF_HEIGHT])  # pole centres
+REST_Z = CableTask().anchor_pos[2]  # cable centre line lying on the table
+P1 = CableTask().poles_nominal_pos + np.array([0.0, 0.0, POLE_HALF_HEIGHT])  # pole centres
 P2 = P1 + np.array([POLE_SPACING, 0.0, 0.0])
-ANCHOR = CableTask.anchor_pos
+ANCHOR = CableTask().anchor_pos
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +92,7 @@ def _resample(path: np.ndarray, count: int, length: float) -> np.ndarray:
 
 def _set_cable(env: RmbEnv, points: np.ndarray) -> None:
     """Put the simulated cable's vertices at ``points`` (the end box follows the last edge)."""
-    model, data = env.model, env.data
+    model, data = env.sim.model, env.sim.data
     n = len(points)
     for i in range(1, n - 2):
         body = model.body(f"{CABLE}_{i}")
@@ -106,16 +106,16 @@ def _set_cable(env: RmbEnv, points: np.ndarray) -> None:
 
 def test_is_success_reads_the_simulated_cable(cable_env):
     cable_env.reset(seed=0, options={"world_idx": 1})
-    assert not cable_env.task.is_success(cable_env.model, cable_env.data)  # straight at start
+    assert not cable_env.task.is_success(cable_env.sim)  # straight at start
     extended = np.vstack([S_SHAPE, [[0.0, -0.2, REST_Z]]])  # long enough to resample 0.48 m
     wanted = _resample(extended, CableTask.num_vertices, CABLE_LENGTH)
     _set_cable(cable_env, wanted)
-    assert cable_env.task.cable_points(cable_env.model, cable_env.data) == pytest.approx(wanted)
-    assert cable_env.task.is_success(cable_env.model, cable_env.data)
+    assert cable_env.task.cable_points(cable_env.sim) == pytest.approx(wanted)
+    assert cable_env.task.is_success(cable_env.sim)
 
 
 def test_cable_is_an_elastic_rod_on_the_discrete_integrator(cable_env):
-    model = cable_env.model
+    model = cable_env.sim.model
     flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CABLE)
     assert model.nflex == 1 and model.flex_dim[flex] == 1
     assert model.flex_vertnum[flex] == CableTask.num_vertices
@@ -127,9 +127,9 @@ def test_cable_is_an_elastic_rod_on_the_discrete_integrator(cable_env):
 def test_worlds_shift_the_poles_only(cable_env, world_idx):
     _, info = cable_env.reset(seed=0, options={"world_idx": world_idx})
     offset = CableTask.world_offsets[world_idx]
-    assert cable_env.data.geom(POLE1).xpos == pytest.approx(P1 + offset)
-    assert cable_env.data.geom(POLE2).xpos == pytest.approx(P2 + offset)
-    points = cable_env.task.cable_points(cable_env.model, cable_env.data)
+    assert cable_env.sim.data.geom(POLE1).xpos == pytest.approx(P1 + offset)
+    assert cable_env.sim.data.geom(POLE2).xpos == pytest.approx(P2 + offset)
+    points = cable_env.task.cable_points(cable_env.sim)
     assert points[0] == pytest.approx(ANCHOR)
     assert points[-1] == pytest.approx(ANCHOR - np.array([0.0, CABLE_LENGTH, 0.0]))
     assert not info["is_success"]
@@ -144,7 +144,7 @@ def test_random_shift_is_bounded_planar_and_seeded(cable_env):
     positions = []
     for _ in range(2):
         cable_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
-        positions.append(cable_env.data.geom(POLE1).xpos.copy())
+        positions.append(cable_env.sim.data.geom(POLE1).xpos.copy())
     shift = positions[0] - nominal
     assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
     assert shift[2] == 0.0  # the poles stand on the table
@@ -153,7 +153,7 @@ def test_random_shift_is_bounded_planar_and_seeded(cable_env):
 
 def test_start_pose_is_rmbs(cable_env):
     obs, _ = cable_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(CableTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(CableTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 # (seed, world) of the random-action rollouts: the invariants must hold for each (one chaotic
@@ -169,14 +169,14 @@ def test_random_actions_keep_the_simulation_stable(cable_env, random_actions, se
     env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     slide = np.concatenate(
         [
-            env.model.jnt_dofadr[env.model.body(f"{CABLE}_{i}").jntadr[0]] + np.arange(3)
+            env.sim.model.jnt_dofadr[env.sim.model.body(f"{CABLE}_{i}").jntadr[0]] + np.arange(3)
             for i in range(1, CableTask.num_vertices - 2)
         ]
     )
     fastest = 0.0
     for _ in random_actions(env, steps=300, seed=seed):
-        fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
-    points = env.task.cable_points(env.model, env.data)
+        fastest = max(fastest, float(np.abs(env.sim.data.qvel[slide]).max()))
+    points = env.task.cable_points(env.sim)
     edges = np.linalg.norm(np.diff(points, axis=0), axis=1)
     spacing = CABLE_LENGTH / (CableTask.num_vertices - 1)
     assert fastest < MAX_SPEED
@@ -200,7 +200,9 @@ def test_catalog_lists_the_cable():
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest poles
 def test_expert_routes_the_cable(cable_env, run_expert, episode):
     info = run_expert(cable_env, CableExpert, episode)
-    assert info["is_success"], f"episode {episode}: end at {cable_env.data.body(CABLE_END).xpos}"
+    assert info["is_success"], (
+        f"episode {episode}: end at {cable_env.sim.data.body(CABLE_END).xpos}"
+    )
 
 
 def test_expert_in_eef_rel_mode(make_env, run_expert):

@@ -21,11 +21,11 @@ from scipy.spatial.transform import Rotation
 
 NUM_POINTS = CLOTH_ROWS * CLOTH_COLUMNS
 BOARD_ROT = Rotation.from_euler("z", ClothTask.board_yaw).as_matrix()
-CORNERS = board_corners(ClothTask.board_nominal_pos, BOARD_ROT, np.array(BOARD_HALF_SIZE))
+CORNERS = board_corners(ClothTask().board_nominal_pos, BOARD_ROT, np.array(BOARD_HALF_SIZE))
 Z_THRESHOLD = CORNERS[:, 2].min() - 0.092  # RMB: 0.092 m below the board's lowest corner
 X_THRESHOLD = CORNERS[:, 0].min() - 0.001
 ACROSS, ALONG = BOARD_ROT[:, 0], BOARD_ROT[:, 1]  # away from the robot, along the hem
-HINGE_ACROSS, CLOTH_ALONG = (ClothTask.cloth_centre - ClothTask.board_nominal_pos) @ BOARD_ROT[
+HINGE_ACROSS, CLOTH_ALONG = (ClothTask().cloth_centre - ClothTask().board_nominal_pos) @ BOARD_ROT[
     :, :2
 ]
 
@@ -40,7 +40,7 @@ def cloth_env():
 def _grid(rows_across: np.ndarray, rows_z: np.ndarray) -> np.ndarray:
     """Cloth points (row-major, top row first) with row ``r`` at board-frame offset
     ``rows_across[r]`` from the board centre and height ``rows_z[r]``."""
-    centre = ClothTask.board_nominal_pos
+    centre = ClothTask().board_nominal_pos
     along = CLOTH_ALONG + (np.arange(CLOTH_COLUMNS) - (CLOTH_COLUMNS - 1) / 2) * CLOTH_SPACING
     return np.array(
         [
@@ -51,8 +51,8 @@ def _grid(rows_across: np.ndarray, rows_z: np.ndarray) -> np.ndarray:
     )
 
 
-HINGE_Z = ClothTask.cloth_centre[2] + (CLOTH_ROWS - 1) / 2 * CLOTH_SPACING
-TOP_Z = ClothTask.board_nominal_pos[2] + BOARD_HALF_SIZE[2] + 0.004
+HINGE_Z = ClothTask().cloth_centre[2] + (CLOTH_ROWS - 1) / 2 * CLOTH_SPACING
+TOP_Z = ClothTask().board_nominal_pos[2] + BOARD_HALF_SIZE[2] + 0.004
 # Hanging straight down from the pinned row, as at the start.
 HANGING = _grid(np.full(CLOTH_ROWS, HINGE_ACROSS), HINGE_Z - CLOTH_SPACING * np.arange(CLOTH_ROWS))
 # Laid over the board: the pinned row, then up over the near edge and across the top.
@@ -89,7 +89,7 @@ def test_cloth_pulled_towards_the_robot_fails():
 
 def _set_cloth(env: RmbEnv, points: np.ndarray) -> None:
     """Put the simulated cloth's free vertices at ``points`` (pinned ones stay on the board)."""
-    model, data = env.model, env.data
+    model, data = env.sim.model, env.sim.data
     for i in range(CLOTH_COLUMNS, NUM_POINTS):
         body = data.body(f"{CLOTH}_{i}")
         adr = model.jnt_qposadr[model.body(f"{CLOTH}_{i}").jntadr[0]]
@@ -101,15 +101,15 @@ def _set_cloth(env: RmbEnv, points: np.ndarray) -> None:
 
 def test_is_success_reads_the_simulated_cloth(cloth_env):
     cloth_env.reset(seed=0, options={"world_idx": 3})
-    assert not cloth_env.task.is_success(cloth_env.model, cloth_env.data)
+    assert not cloth_env.task.is_success(cloth_env.sim)
     _set_cloth(cloth_env, DRAPED)
-    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    points = cloth_env.task.cloth_points(cloth_env.sim)
     assert points[CLOTH_COLUMNS:] == pytest.approx(DRAPED[CLOTH_COLUMNS:])
-    assert cloth_env.task.is_success(cloth_env.model, cloth_env.data)
+    assert cloth_env.task.is_success(cloth_env.sim)
 
 
 def test_cloth_is_a_pinned_2d_flex_of_rmbs_grid(cloth_env):
-    model = cloth_env.model
+    model = cloth_env.sim.model
     flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
     assert model.nflex == 1 and model.flex_dim[flex] == 2
     assert model.flex_vertnum[flex] == NUM_POINTS == 63  # RMB's 9 x 7 composite grid
@@ -132,9 +132,9 @@ def test_cloth_is_a_pinned_2d_flex_of_rmbs_grid(cloth_env):
 def test_worlds_shift_cloth_and_board_together(cloth_env, world_idx):
     _, info = cloth_env.reset(seed=0, options={"world_idx": world_idx})
     offset = ClothTask.world_offsets[world_idx]
-    board = cloth_env.data.geom(BOARD).xpos
-    assert board == pytest.approx(ClothTask.board_nominal_pos + offset)
-    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    board = cloth_env.sim.data.geom(BOARD).xpos
+    assert board == pytest.approx(ClothTask().board_nominal_pos + offset)
+    points = cloth_env.task.cloth_points(cloth_env.sim)
     assert points == pytest.approx(HANGING + offset, abs=1e-9)
     assert not info["is_success"]
 
@@ -145,11 +145,11 @@ def test_worlds_span_rmbs_offsets():
 
 
 def test_random_shift_is_bounded_three_dimensional_and_seeded(cloth_env):
-    nominal = ClothTask.board_nominal_pos + ClothTask.world_offsets[2]
+    nominal = ClothTask().board_nominal_pos + ClothTask.world_offsets[2]
     positions = []
     for _ in range(2):
         cloth_env.reset(seed=7, options={"world_idx": 2, "random_shift": 0.03})
-        positions.append(cloth_env.data.geom(BOARD).xpos.copy())
+        positions.append(cloth_env.sim.data.geom(BOARD).xpos.copy())
     shift = positions[0] - nominal
     assert np.all(np.abs(shift) <= 0.03) and np.all(np.abs(shift) > 1e-4)  # x, y and z (RMB)
     assert positions[1] == pytest.approx(positions[0])
@@ -157,14 +157,14 @@ def test_random_shift_is_bounded_three_dimensional_and_seeded(cloth_env):
 
 def test_start_pose_is_rmbs(cloth_env):
     obs, _ = cloth_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(ClothTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(ClothTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 def _edge_lengths(env: RmbEnv) -> np.ndarray:
-    flex = mujoco.mj_name2id(env.model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
-    start, count = env.model.flex_edgeadr[flex], env.model.flex_edgenum[flex]
-    edges = env.model.flex_edge[start : start + count]
-    points = env.task.cloth_points(env.model, env.data)
+    flex = mujoco.mj_name2id(env.sim.model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
+    start, count = env.sim.model.flex_edgeadr[flex], env.sim.model.flex_edgenum[flex]
+    edges = env.sim.model.flex_edge[start : start + count]
+    points = env.task.cloth_points(env.sim)
     return np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
 
 
@@ -184,17 +184,17 @@ def test_random_actions_keep_the_simulation_stable(cloth_env, random_actions, se
     env = cloth_env
     env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     rest = _edge_lengths(env)
-    first_free = env.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
+    first_free = env.sim.model.body(f"{CLOTH}_{CLOTH_COLUMNS}").dofadr[0]
     cloth_dofs = slice(first_free, first_free + 3 * (NUM_POINTS - CLOTH_COLUMNS))
     fastest, stretch = 0.0, []
     for _ in random_actions(env, steps=RANDOM_STEPS, seed=seed):
-        fastest = max(fastest, float(np.abs(env.data.qvel[cloth_dofs]).max()))
+        fastest = max(fastest, float(np.abs(env.sim.data.qvel[cloth_dofs]).max()))
         stretch.append(float((_edge_lengths(env) / rest).max()))
     for _ in range(30):  # the arm goes home: whatever it left the cloth in, edges spring back
         env.step(env.home_command)
     settled = float((_edge_lengths(env) / rest).max())
-    board = env.data.geom(BOARD).xpos.copy()
-    top_row = env.task.cloth_points(env.model, env.data)[:CLOTH_COLUMNS]
+    board = env.sim.data.geom(BOARD).xpos.copy()
+    top_row = env.task.cloth_points(env.sim)[:CLOTH_COLUMNS]
     assert fastest < MAX_POINT_SPEED
     # Random joint targets slam the arm into the cloth and the board at full speed: an edge
     # squeezed between them, or whipped, stretches for a moment, but never far.
@@ -217,7 +217,7 @@ def test_catalog_lists_the_cloth():
 @pytest.mark.parametrize("episode", [0, 5])  # the cloth nearest the robot's right and left
 def test_expert_lifts_the_cloth_onto_the_board(cloth_env, run_expert, episode):
     info = run_expert(cloth_env, ClothExpert, episode)
-    points = cloth_env.task.cloth_points(cloth_env.model, cloth_env.data)
+    points = cloth_env.task.cloth_points(cloth_env.sim)
     assert info["is_success"], f"episode {episode}: lowest cloth point at {points[:, 2].min()}"
 
 

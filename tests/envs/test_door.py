@@ -18,22 +18,22 @@ def door_env():
 @pytest.mark.parametrize(("angle_deg", "expected"), [(0, False), (-44, False), (-45.5, True)])
 def test_success_criterion(door_env, angle_deg, expected):
     door_env.reset(seed=0)
-    door_env.data.joint(DOOR).qpos[0] = np.deg2rad(angle_deg)
-    mujoco.mj_kinematics(door_env.model, door_env.data)
-    assert door_env.task.is_success(door_env.model, door_env.data) is expected
+    door_env.sim.data.joint(DOOR).qpos[0] = np.deg2rad(angle_deg)
+    mujoco.mj_kinematics(door_env.sim.model, door_env.sim.data)
+    assert door_env.task.is_success(door_env.sim) is expected
 
 
 @pytest.mark.parametrize("world_idx", [0, 5])
 def test_worlds_shift_the_door(door_env, world_idx):
     door_env.reset(seed=0, options={"world_idx": world_idx})
-    expected = DoorTask.door_nominal_pos + DoorTask.world_offsets[world_idx]
-    assert door_env.data.body(DOOR).xpos == pytest.approx(expected)
-    assert door_env.data.joint(DOOR).qpos[0] == 0.0
+    expected = DoorTask().door_nominal_pos + DoorTask.world_offsets[world_idx]
+    assert door_env.sim.data.body(DOOR).xpos == pytest.approx(expected)
+    assert door_env.sim.data.joint(DOOR).qpos[0] == 0.0
 
 
 def test_start_pose_is_rmbs(door_env):
     obs, _ = door_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(DoorTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(DoorTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 def test_expert_opens_the_door(door_env):
@@ -45,4 +45,4 @@ def test_expert_opens_the_door(door_env):
             obs, _, terminated, _, info = door_env.step(expert(obs))
             if terminated:
                 break
-        assert info["is_success"], f"world {world}: door at {door_env.data.joint(DOOR).qpos}"
+        assert info["is_success"], f"world {world}: door at {door_env.sim.data.joint(DOOR).qpos}"

@@ -20,7 +20,7 @@ def run(env, actions, seed, options=None):
     for action in actions:
         obs, *_ = env.step(action)
         trace.append(obs["agent_pos"].copy())
-    return np.array(trace), env.data.body(HOLE).xpos.copy()
+    return np.array(trace), env.sim.data.body(HOLE).xpos.copy()
 
 
 @pytest.mark.parametrize("mode", ["joint", "eef_abs", "eef_rel"])
@@ -59,8 +59,8 @@ def test_same_seed_same_episode(physics_env):
 @pytest.mark.parametrize("world_idx", range(6))
 def test_each_world_shifts_the_hole(physics_env, world_idx):
     physics_env.reset(seed=0, options={"world_idx": world_idx})
-    expected = InsertTask.hole_nominal_pos + InsertTask.world_offsets[world_idx]
-    assert physics_env.data.body(HOLE).xpos == pytest.approx(expected)
+    expected = InsertTask().hole_nominal_pos + InsertTask.world_offsets[world_idx]
+    assert physics_env.sim.data.body(HOLE).xpos == pytest.approx(expected)
     assert physics_env.world_idx == world_idx
     assert physics_env.rmb_attrs()[K.ATTR_WORLD_IDX] == world_idx
 
@@ -74,8 +74,8 @@ def test_random_shift_is_bounded_planar_and_seeded(physics_env):
     positions = []
     for seed in range(20):
         physics_env.reset(seed=seed, options={"world_idx": 2, "random_shift": 0.01})
-        positions.append(physics_env.data.body(HOLE).xpos.copy())
-    offsets = np.array(positions) - InsertTask.hole_nominal_pos
+        positions.append(physics_env.sim.data.body(HOLE).xpos.copy())
+    offsets = np.array(positions) - InsertTask().hole_nominal_pos
     assert np.all(np.abs(offsets[:, :2]) <= 0.01) and np.all(offsets[:, 2] == 0)
     assert np.std(offsets[:, 0]) > 1e-3
 
@@ -116,9 +116,7 @@ def test_eef_actions_reproduce_the_joint_command():
     down = np.array([0, 0, 0.01, 0, 0, 0, 0.0])  # +z of the flange frame points down
     env.step(down)
     moved = env.command_eef_pose
-    assert moved[:3] - env.kinematics.fk(env.home_command)[:3] == pytest.approx(
-        [0, 0, -0.01], abs=1e-4
-    )
+    assert moved[:3] - env.eef_pose(env.home_command)[:3] == pytest.approx([0, 0, -0.01], abs=1e-4)
     env.close()
 
 
@@ -140,7 +138,7 @@ def test_rmb_step_data_holds_every_recorded_key(physics_env):
     ):
         assert np.shape(step[key]) == (K.spec(key).dim(layout),), key
     assert step[K.COMMAND_JOINT_POS] == pytest.approx(action)
-    assert step[K.COMMAND_EEF_POSE] == pytest.approx(physics_env.kinematics.fk(action))
+    assert step[K.COMMAND_EEF_POSE] == pytest.approx(physics_env.eef_pose(action))
     assert step[K.TIME] == 0.0 and step[K.REWARD] == 0.0
     physics_env.step(action)
     after = physics_env.rmb_step_data()
@@ -151,7 +149,7 @@ def test_rmb_step_data_holds_every_recorded_key(physics_env):
 def test_recorded_episode_reads_back(camera_env, tmp_path):
     camera_env.reset(seed=0, options={"world_idx": 4})
     path = tmp_path / "ep.hdf5"
-    with EpisodeWriter(path, camera_env.rmb_attrs(), fk=camera_env.kinematics) as writer:
+    with EpisodeWriter(path, camera_env.rmb_attrs(), fk=camera_env.eef_pose) as writer:
         for _ in range(4):
             action = camera_env.home_command
             writer.append(camera_env.rmb_step_data(action))

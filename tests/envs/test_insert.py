@@ -11,15 +11,15 @@ from scipy.spatial.transform import Rotation
 
 def place_peg(env, dxy=(0.0, 0.0), end_height=0.005, tilt_deg=0.0):
     """Put the peg with its lower end ``end_height`` above the hole floor (no physics)."""
-    hole = env.data.body(HOLE).xpos.copy()
+    hole = env.sim.data.body(HOLE).xpos.copy()
     rot = Rotation.from_euler("x", 180 + tilt_deg, degrees=True)  # z axis down, as held
     axis = rot.apply([0, 0, 1])
     centre = hole + np.array([dxy[0], dxy[1], end_height + PEG_HALF_LENGTH * abs(axis[2])])
-    qpos = env.data.joint(PEG).qpos
+    qpos = env.sim.data.joint(PEG).qpos
     qpos[:3] = centre
     qpos[3:] = rot.as_quat(scalar_first=True)
-    mujoco.mj_kinematics(env.model, env.data)
-    return env.task.is_success(env.model, env.data)
+    mujoco.mj_kinematics(env.sim.model, env.sim.data)
+    return env.task.is_success(env.sim)
 
 
 @pytest.mark.parametrize(
@@ -47,11 +47,11 @@ def test_start_state_is_not_a_success(physics_env):
 
 def test_peg_starts_in_the_gripper_and_stays_there(physics_env):
     physics_env.reset(seed=0)
-    tcp = physics_env.data.site(physics_env.robot.tcp_site)
-    gap = physics_env.data.body(PEG).xpos - tcp.xpos
+    tcp = physics_env.sim.data.site(physics_env.robot.arms[0].tcp_frame)
+    gap = physics_env.sim.data.body(PEG).xpos - tcp.xpos
     for _ in range(20):
         physics_env.step(physics_env.home_command)
-    assert np.linalg.norm(physics_env.data.body(PEG).xpos - tcp.xpos - gap) < 0.005
+    assert np.linalg.norm(physics_env.sim.data.body(PEG).xpos - tcp.xpos - gap) < 0.005
 
 
 @pytest.mark.parametrize(("mode", "world"), [("joint", 0), ("joint", 5), ("eef_rel", 3)])

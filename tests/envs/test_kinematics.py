@@ -13,11 +13,11 @@ from rmb_lerobot.pose import quat_to_rotmat
 
 @pytest.fixture(scope="module")
 def kin(physics_env) -> ArmKinematics:
-    return physics_env.kinematics
+    return physics_env.sim.kinematics[0]
 
 
 def test_composed_model_has_rmb_actuators_and_sensors(physics_env):
-    model = physics_env.model
+    model = physics_env.sim.model
     names = [model.actuator(i).name for i in range(model.nu)]
     assert names == [*UR5E_2F85.arm_actuators, UR5E_2F85.gripper_actuator]
     assert tuple(model.actuator_ctrlrange[-1]) == (0.0, 255.0)
@@ -37,7 +37,7 @@ def test_fk_agrees_with_the_ur5e_dh_table(kin):
 
 def test_home_pose_points_the_gripper_down_over_the_table(physics_env, kin):
     physics_env.reset(seed=0)
-    tcp = physics_env.data.site(UR5E_2F85.tcp_site)
+    tcp = physics_env.sim.data.site(UR5E_2F85.tcp_site)
     assert tcp.xmat.reshape(3, 3)[:, 2] == pytest.approx([0, 0, -1], abs=1e-6)
     assert -0.3 < tcp.xpos[0] < 0.0 and tcp.xpos[2] > 0.9
 

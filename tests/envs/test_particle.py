@@ -6,7 +6,6 @@ import pytest
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 from rmb_lerobot.envs.experts.particle import ParticleExpert
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.particle import (
     CASE_HEIGHT,
     GOAL,
@@ -18,9 +17,10 @@ from rmb_lerobot.envs.tasks.particle import (
     ParticleTask,
     count_in_goal,
 )
+from rmb_lerobot.envs.workspace import RMB_TABLE
 
-GOAL_CENTRE = ParticleTask.goal_pos  # RMB's: 4 cm below the table top
-ON_GOAL_FLOOR = np.array([*GOAL_CENTRE[:2], TABLE_TOP_Z + PARTICLE_RADIUS])
+GOAL_CENTRE = ParticleTask().goal_pos  # RMB's: 4 cm below the table top
+ON_GOAL_FLOOR = np.array([*GOAL_CENTRE[:2], RMB_TABLE.table.top_z + PARTICLE_RADIUS])
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +51,7 @@ def test_particles_outside_the_goal_box_do_not_count(where):
 def _put_particles(env: RmbEnv, positions: np.ndarray) -> None:
     """Move the first ``len(positions)`` particles there (their slide joints hold the offset
     from the body's build position)."""
-    model, data = env.model, env.data
+    model, data = env.sim.model, env.sim.data
     for i, pos in enumerate(positions):
         body = model.body(f"{PARTICLE}_{i}")
         adr = model.jnt_qposadr[body.jntadr[0]]
@@ -61,18 +61,18 @@ def _put_particles(env: RmbEnv, positions: np.ndarray) -> None:
 
 def test_is_success_reads_the_simulated_particles(particle_env):
     particle_env.reset(seed=0, options={"world_idx": 2})
-    task, model, data = particle_env.task, particle_env.model, particle_env.data
-    assert not task.is_success(model, data)
+    task = particle_env.task
+    assert not task.is_success(particle_env.sim)
     targets = ON_GOAL_FLOOR + np.array([[-0.03, 0.0, 0.0], [0.0, 0.0, 0.0], [0.03, 0.0, 0.0]])
     _put_particles(particle_env, targets[:2])
-    assert task.particle_positions(model, data)[:2] == pytest.approx(targets[:2])
-    assert not task.is_success(model, data)
+    assert task.particle_positions(particle_env.sim)[:2] == pytest.approx(targets[:2])
+    assert not task.is_success(particle_env.sim)
     _put_particles(particle_env, targets)
-    assert task.is_success(model, data)
+    assert task.is_success(particle_env.sim)
 
 
 def test_particles_are_non_rotating_spheres_like_mujocos_composite(particle_env):
-    model = particle_env.model
+    model = particle_env.sim.model
     assert ParticleTask().num_particles == 30
     for i in (0, 29):
         body = model.body(f"{PARTICLE}_{i}")
@@ -84,18 +84,18 @@ def test_particles_are_non_rotating_spheres_like_mujocos_composite(particle_env)
 @pytest.mark.parametrize("world_idx", [0, 5])
 def test_worlds_shift_the_source_and_its_particles_only(particle_env, world_idx):
     _, info = particle_env.reset(seed=0, options={"world_idx": world_idx})
-    task, model, data = particle_env.task, particle_env.model, particle_env.data
+    task, data = particle_env.task, particle_env.sim.data
     offset = ParticleTask.world_offsets[world_idx]
-    source = ParticleTask.source_nominal_pos + offset
+    source = ParticleTask().source_nominal_pos + offset
     assert data.body(SOURCE).xpos == pytest.approx(source)
     assert data.geom(f"{SOURCE}_px").xpos[:2] == pytest.approx(
         source[:2] + np.array([SOURCE_HALF_SIDE, 0.0])
     )
-    particles = task.particle_positions(model, data)
+    particles = task.particle_positions(particle_env.sim)
     assert particles == pytest.approx(task.particle_start_positions(source))
     assert np.all(np.abs(particles[:, :2] - source[:2]) < 0.115 - PARTICLE_RADIUS)
-    assert data.body(GOAL).xpos == pytest.approx(ParticleTask.goal_pos)
-    assert data.body(SCOOP).xpos == pytest.approx(ParticleTask.scoop_pos)
+    assert data.body(GOAL).xpos == pytest.approx(ParticleTask().goal_pos)
+    assert data.body(SCOOP).xpos == pytest.approx(ParticleTask().scoop_pos)
     assert not info["is_success"]
 
 
@@ -105,11 +105,11 @@ def test_worlds_span_rmbs_source_offsets():
 
 
 def test_random_shift_is_bounded_planar_and_seeded(particle_env):
-    nominal = ParticleTask.source_nominal_pos + ParticleTask.world_offsets[3]
+    nominal = ParticleTask().source_nominal_pos + ParticleTask.world_offsets[3]
     positions = []
     for _ in range(2):
         particle_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
-        positions.append(particle_env.data.body(SOURCE).xpos.copy())
+        positions.append(particle_env.sim.data.body(SOURCE).xpos.copy())
     shift = positions[0] - nominal
     assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
     assert shift[2] == 0.0
@@ -118,16 +118,16 @@ def test_random_shift_is_bounded_planar_and_seeded(particle_env):
 
 def test_start_pose_is_rmbs(particle_env):
     obs, _ = particle_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(ParticleTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(ParticleTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 def test_resting_particles_stay_put_and_fall_asleep(particle_env):
     particle_env.reset(seed=0, options={"world_idx": 1})
-    task, model, data = particle_env.task, particle_env.model, particle_env.data
-    start = task.particle_positions(model, data)
+    task, model, data = particle_env.task, particle_env.sim.model, particle_env.sim.data
+    start = task.particle_positions(particle_env.sim)
     for _ in range(10):
         particle_env.step(particle_env.home_command)
-    assert task.particle_positions(model, data) == pytest.approx(start, abs=1e-3)
+    assert task.particle_positions(particle_env.sim) == pytest.approx(start, abs=1e-3)
     particle_trees = model.body_treeid[[model.body(f"{PARTICLE}_{i}").id for i in range(30)]]
     assert np.all(data.tree_asleep[particle_trees] >= 0)  # out of the solver until touched
 
@@ -143,14 +143,14 @@ MAX_SPEED = 25.0  # m/s
 def test_random_actions_keep_the_simulation_stable(particle_env, random_actions, seed, world_idx):
     env = particle_env
     env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
-    model = env.model
+    model = env.sim.model
     bodies = [model.body(f"{PARTICLE}_{i}") for i in range(30)] + [model.body(SCOOP)]
     # The particles' slide joints and the scoop's linear velocity (the first three).
     linear = np.concatenate([model.jnt_dofadr[b.jntadr[0]] + np.arange(3) for b in bodies])
     fastest = 0.0
     for _ in random_actions(env, steps=300, seed=seed):
-        fastest = max(fastest, float(np.abs(env.data.qvel[linear]).max()))
-    particles = env.task.particle_positions(model, env.data)
+        fastest = max(fastest, float(np.abs(env.sim.data.qvel[linear]).max()))
+    particles = env.task.particle_positions(env.sim)
     assert fastest < MAX_SPEED
     assert np.all(np.abs(particles[:, :2]) < 2.0)  # still near the table (or on the floor)
     assert np.all(particles[:, 2] > PARTICLE_RADIUS - 0.005)  # none fell through anything
@@ -170,7 +170,7 @@ def test_catalog_lists_the_particle_task():
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest source
 def test_expert_scoops_particles_into_the_goal(particle_env, run_expert, episode):
     info = run_expert(particle_env, ParticleExpert, episode)
-    positions = particle_env.task.particle_positions(particle_env.model, particle_env.data)
+    positions = particle_env.task.particle_positions(particle_env.sim)
     assert info["is_success"], f"episode {episode}: {count_in_goal(positions, GOAL_CENTRE)} in"
 
 

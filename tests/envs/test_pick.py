@@ -32,12 +32,12 @@ def pick_env():
 
 def _put(env: RmbEnv, obj, basket, offset=(0.0, 0.0, 0.0), speed: float = 0.0) -> None:
     """Teleport ``obj`` upright to the basket floor (plus ``offset``) with a given x speed."""
-    joint = env.data.joint(obj.body)
-    floor = env.data.body(basket.body).xpos + np.array([0.0, 0.0, basket.floor])
+    joint = env.sim.data.joint(obj.body)
+    floor = env.sim.data.body(basket.body).xpos + np.array([0.0, 0.0, basket.floor])
     joint.qpos[:3] = floor + np.asarray(offset)
     joint.qvel[:] = 0.0
     joint.qvel[0] = speed
-    mujoco.mj_kinematics(env.model, env.data)
+    mujoco.mj_kinematics(env.sim.model, env.sim.data)
 
 
 def test_eighteen_instructions_name_every_pair():
@@ -64,9 +64,9 @@ def test_instruction_is_drawn_from_the_seed(pick_env):
 
 def test_giving_the_instruction_keeps_the_seeds_layout(pick_env):
     pick_env.reset(seed=5, options={"random_shift": 0.03})
-    free = pick_env.data.qpos.copy()
+    free = pick_env.sim.data.qpos.copy()
     pick_env.reset(seed=5, options={"random_shift": 0.03, "instruction": INSTRUCTIONS[7]})
-    assert pick_env.data.qpos == pytest.approx(free)
+    assert pick_env.sim.data.qpos == pytest.approx(free)
 
 
 def test_lerobot_vector_env_gives_each_env_its_own_instruction():
@@ -108,9 +108,9 @@ def test_unknown_instruction_is_rejected(pick_env):
 )
 def test_success_criterion(pick_env, obj, basket, offset, speed, expected):
     pick_env.reset(seed=0, options={"instruction": "Put the banana in the blue basket."})
-    assert not pick_env.task.is_success(pick_env.model, pick_env.data)
+    assert not pick_env.task.is_success(pick_env.sim)
     _put(pick_env, obj, basket, offset, speed)
-    assert pick_env.task.is_success(pick_env.model, pick_env.data) is expected
+    assert pick_env.task.is_success(pick_env.sim) is expected
 
 
 @pytest.mark.parametrize("world_idx", [0, 5])
@@ -120,9 +120,9 @@ def test_worlds_shift_the_baskets_only(pick_env, world_idx):
     assert shift[0] != 0.0 and not shift[1:].any()
     for basket in BASKETS:
         expected = np.array([*basket.pos, 0.0]) + shift
-        assert pick_env.data.body(basket.body).xpos[:2] == pytest.approx(expected[:2])
+        assert pick_env.sim.data.body(basket.body).xpos[:2] == pytest.approx(expected[:2])
     for obj in OBJECTS:
-        assert pick_env.data.body(obj.body).xpos[:2] == pytest.approx(obj.slot)
+        assert pick_env.sim.data.body(obj.body).xpos[:2] == pytest.approx(obj.slot)
     assert not info["is_success"]
 
 
@@ -130,7 +130,7 @@ def test_random_shift_moves_objects_independently_and_is_seeded(pick_env):
     layouts = []
     for _ in range(2):
         pick_env.reset(seed=11, options={"world_idx": 2, "random_shift": 0.03})
-        layouts.append(np.array([pick_env.data.body(o.body).xpos.copy() for o in OBJECTS]))
+        layouts.append(np.array([pick_env.sim.data.body(o.body).xpos.copy() for o in OBJECTS]))
     shifts = layouts[0][:, :2] - np.array([o.slot for o in OBJECTS])
     assert np.all(np.abs(shifts) <= 0.03) and len(np.unique(shifts.round(6), axis=0)) == 9
     assert layouts[0][:, 2] == pytest.approx(layouts[0][0, 2])  # all start on the table
@@ -159,9 +159,9 @@ def test_random_actions_keep_the_simulation_stable(pick_env, random_actions, see
     env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     fastest = 0.0
     for _ in random_actions(env, steps=300, seed=seed):
-        speeds = [np.linalg.norm(env.data.joint(o.body).qvel[:3]) for o in OBJECTS]
+        speeds = [np.linalg.norm(env.sim.data.joint(o.body).qvel[:3]) for o in OBJECTS]
         fastest = max(fastest, *speeds)
-    heights = [env.data.body(o.body).xpos[2] for o in OBJECTS]
+    heights = [env.sim.data.body(o.body).xpos[2] for o in OBJECTS]
     # Swatted about by the arm (a bottle knocked onto the floor may roll far), never launched.
     assert fastest < MAX_SPEED
     assert min(heights) > -0.005  # nothing sank into the table or the floor
@@ -178,7 +178,9 @@ def test_catalog_lists_pick():
 def test_expert_puts_the_named_object_in_the_named_basket(pick_env, run_expert, seed, instruction):
     info = run_expert(pick_env, PickExpert, seed, instruction=instruction)
     task = pick_env.task
-    assert info["is_success"], f"{instruction}: {pick_env.data.body(task.target_object.body).xpos}"
+    assert info["is_success"], (
+        f"{instruction}: {pick_env.sim.data.body(task.target_object.body).xpos}"
+    )
 
 
 def test_expert_in_eef_rel_mode(make_env, run_expert):

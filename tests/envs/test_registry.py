@@ -61,7 +61,7 @@ def test_entry_matches_its_task_and_expert(name):
     entry = ENVS[name]
     task_class = entry.load_task_class()
     assert task_class is TASKS[name] and entry.load_expert_class() is EXPERTS[name]
-    assert task_class.rmb_env_name == entry.rmb_env_name
+    assert task_class.name == entry.task
     aliases = (entry.name, entry.rmb_env_name, entry.env_attr, entry.gym_id, entry.lerobot_type)
     for alias in aliases:
         assert entry_for(alias) is entry

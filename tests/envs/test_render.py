@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
-from rmb_lerobot.envs.mujoco.scene import SCENE_CAMERAS
+from rmb_lerobot.envs.workspace import RMB_TABLE
 
 
 def test_observation_images_have_the_requested_size(camera_env):
@@ -18,9 +18,9 @@ def test_observation_images_have_the_requested_size(camera_env):
 
 def test_front_depth_at_the_image_centre_is_the_distance_to_the_table(camera_env):
     camera_env.reset(seed=0, options={"world_idx": 0})
-    renderer = camera_env._get_renderer()
-    _, depth = renderer.render(camera_env.data, ["front"], rgb=False, depth=True)
-    front = next(c for c in SCENE_CAMERAS if c.name == "front")
+    renderer = camera_env.sim._get_renderer()
+    _, depth = renderer.render(camera_env.sim.data, ["front"], rgb=False, depth=True)
+    front = next(c for c in RMB_TABLE.cameras if c.name == "front")
     expected = np.linalg.norm(np.subtract(front.lookat, front.pos))  # optical axis hits lookat
     h, w = depth["front"].shape
     centre = depth["front"][h // 2 - 1 : h // 2 + 1, w // 2 - 1 : w // 2 + 1].mean()
@@ -38,12 +38,12 @@ def test_hand_camera_sees_the_peg_close_and_the_table_further(camera_env):
 
 
 def test_renderer_rejects_bad_cameras_and_sizes(camera_env):
-    renderer = camera_env._get_renderer()
+    renderer = camera_env.sim._get_renderer()
     with pytest.raises(ValueError, match="unknown camera 'nope'"):
-        renderer.render(camera_env.data, ["nope"])
+        renderer.render(camera_env.sim.data, ["nope"])
     with pytest.raises(ValueError, match="exceeds the model's offscreen buffer"):
-        MultiCameraRenderer(camera_env.model, 4000, 3000)
-    assert renderer.render(camera_env.data, []) == ({}, {})
+        MultiCameraRenderer(camera_env.sim.model, 4000, 3000)
+    assert renderer.render(camera_env.sim.data, []) == ({}, {})
 
 
 def test_fovy_per_camera(camera_env):

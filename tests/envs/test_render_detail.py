@@ -18,9 +18,10 @@ import pytest
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.mujoco import meshes
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
-from rmb_lerobot.envs.mujoco.robot import UR5E_2F85
+from rmb_lerobot.envs.mujoco.robots import build_ur5e
 from rmb_lerobot.envs.mujoco.scene import build_scene
 from rmb_lerobot.envs.tasks.insert import InsertTask
+from rmb_lerobot.envs.workspace import RMB_TABLE
 
 CAMERAS = ("front", "left", "right", "hand")
 MAX_MEAN_RGB_DIFF = 1.0  # grey levels of 255
@@ -61,13 +62,13 @@ def physics_pair():
 
 def test_simplified_meshes_are_much_lighter(physics_pair):
     full, light = physics_pair
-    assert _visual_faces(light.model) < 0.15 * _visual_faces(full.model)
-    assert light.model.nmesh > full.model.nmesh  # visual copies of shared gripper meshes
+    assert _visual_faces(light.sim.model) < 0.15 * _visual_faces(full.sim.model)
+    assert light.sim.model.nmesh > full.sim.model.nmesh  # visual copies of shared gripper meshes
 
 
 def test_collision_geometry_and_inertia_are_unchanged(physics_pair):
     full, light = physics_pair
-    a, b = full.model, light.model
+    a, b = full.sim.model, light.sim.model
     for size in ("nbody", "ngeom", "njnt", "nq", "nv", "nu", "neq", "nsensordata"):
         assert getattr(a, size) == getattr(b, size), size
     for field in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "body_pos", "body_quat"):
@@ -96,8 +97,8 @@ def test_physics_is_identical_with_and_without_simplification(physics_pair):
         qpos, sensors = [], []
         for action in _actions(env, 40):
             env.step(action)
-            qpos.append(env.data.qpos.copy())
-            sensors.append(env.data.sensordata.copy())
+            qpos.append(env.sim.data.qpos.copy())
+            sensors.append(env.sim.data.sensordata.copy())
         trajectories.append((np.array(qpos), np.array(sensors)))
     np.testing.assert_array_equal(trajectories[0][0], trajectories[1][0])
     np.testing.assert_array_equal(trajectories[0][1], trajectories[1][1])
@@ -141,15 +142,15 @@ def test_images_stay_close_to_full_detail():
 
 def test_renderer_without_antialiasing(camera_env):
     camera_env.reset(seed=0)
-    samples = camera_env.model.vis.quality.offsamples
-    plain = MultiCameraRenderer(camera_env.model, 64, 48, antialias=False)
+    samples = camera_env.sim.model.vis.quality.offsamples
+    plain = MultiCameraRenderer(camera_env.sim.model, 64, 48, antialias=False)
     try:
-        rgb, depth = plain.render(camera_env.data, ["front"], depth=True)
+        rgb, depth = plain.render(camera_env.sim.data, ["front"], depth=True)
     finally:
         plain.close()
-    assert camera_env.model.vis.quality.offsamples == samples == 4
-    smooth_rgb, smooth_depth = camera_env._get_renderer().render(
-        camera_env.data, ["front"], depth=True
+    assert camera_env.sim.model.vis.quality.offsamples == samples == 4
+    smooth_rgb, smooth_depth = camera_env.sim._get_renderer().render(
+        camera_env.sim.data, ["front"], depth=True
     )
     assert rgb["front"].shape == (48, 64, 3) and rgb["front"].std() > 5
     # Only edge pixels differ (here 64x48, where edges are a large share of the image).
@@ -161,7 +162,7 @@ def test_cache_miss_then_hit(tmp_path, monkeypatch):
     monkeypatch.setenv("RMB_LEROBOT_CACHE", str(tmp_path))
     monkeypatch.setattr(meshes, "_memory_cache", {})
     start = time.perf_counter()
-    first = build_scene(UR5E_2F85).compile()
+    first = build_scene(build_ur5e(), RMB_TABLE).compile()
     miss = time.perf_counter() - start
     cached = sorted(p.name for p in (tmp_path / "visual_meshes").iterdir())
     assert len(cached) == 2 and all(name.endswith(".npz") for name in cached)  # arm, gripper
@@ -172,7 +173,7 @@ def test_cache_miss_then_hit(tmp_path, monkeypatch):
     monkeypatch.setattr(meshes, "_memory_cache", {})
     monkeypatch.setattr(meshes, "compute_simplified_meshes", no_recompute)
     start = time.perf_counter()
-    second = build_scene(UR5E_2F85).compile()
+    second = build_scene(build_ur5e(), RMB_TABLE).compile()
     hit = time.perf_counter() - start
     np.testing.assert_array_equal(first.mesh_vert, second.mesh_vert)
     np.testing.assert_array_equal(first.mesh_face, second.mesh_face)
@@ -185,16 +186,16 @@ def test_unwritable_cache_still_builds(tmp_path, monkeypatch):
     blocker.write_text("not a directory")
     monkeypatch.setenv("RMB_LEROBOT_CACHE", str(blocker))
     monkeypatch.setattr(meshes, "_memory_cache", {})
-    model = build_scene(UR5E_2F85).compile()
+    model = build_scene(build_ur5e(), RMB_TABLE).compile()
     assert _visual_faces(model) < 30_000
 
 
 def test_full_detail_leaves_the_spec_untouched():
-    spec = build_scene(UR5E_2F85, visual_mesh_error=0.0)
+    spec = build_scene(build_ur5e(visual_mesh_error=0.0), RMB_TABLE)
     assert all(mesh.file for mesh in spec.meshes)
     assert not any(mesh.name.endswith(meshes.VISUAL_SUFFIX) for mesh in spec.meshes)
     with pytest.raises(ValueError, match="visual_mesh_error"):
-        build_scene(UR5E_2F85, visual_mesh_error=-1.0)
+        build_ur5e(visual_mesh_error=-1.0)
 
 
 def test_simplify_mesh_keeps_the_surface_within_the_bound():

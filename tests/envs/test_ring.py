@@ -6,9 +6,7 @@ import pytest
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 from rmb_lerobot.envs.experts.ring import RingExpert
-from rmb_lerobot.envs.mujoco.scene import TABLE_TOP_Z
 from rmb_lerobot.envs.tasks.ring import (
-    HOOK_POS,
     PEG1,
     PEG2,
     POLE,
@@ -23,9 +21,11 @@ from rmb_lerobot.envs.tasks.ring import (
     inside_polygon,
     ring_on_pole,
 )
+from rmb_lerobot.envs.workspace import RMB_TABLE
 
-POLE_BASE = RingTask.pole_nominal_pos
-LYING_Z = TABLE_TOP_Z + TUBE_RADIUS
+POLE_BASE = RingTask().pole_nominal_pos
+LYING_Z = RMB_TABLE.table.top_z + TUBE_RADIUS
+HOOK_POS = RingTask().hook_pos
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +74,7 @@ def test_polygon_test_handles_a_concave_ring():
 
 
 def test_ring_is_a_closed_elastic_rod(ring_env):
-    model, data = ring_env.model, ring_env.data
+    model, data = ring_env.sim.model, ring_env.sim.data
     ring_env.reset(seed=0, options={"world_idx": 0})
     flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, RING)
     n = RingTask.num_segments
@@ -91,14 +91,14 @@ def test_ring_is_a_closed_elastic_rod(ring_env):
 
 def test_ring_starts_hanging_on_the_hook(ring_env):
     ring_env.reset(seed=0, options={"world_idx": 2})
-    points = ring_env.task.ring_points(ring_env.model, ring_env.data)
+    points = ring_env.task.ring_points(ring_env.sim)
     assert points[:, 0] == pytest.approx(HOOK_POS[0])  # in the vertical y-z plane
     assert points.mean(axis=0)[1] == pytest.approx(HOOK_POS[1])
     peg_top = HOOK_POS[2] + 0.01
     assert points[0, 2] > peg_top + TUBE_RADIUS  # the top vertex is above the pegs
     for _ in range(30):  # and the ring stays there
         ring_env.step(ring_env.home_command)
-    moved = ring_env.task.ring_points(ring_env.model, ring_env.data) - points
+    moved = ring_env.task.ring_points(ring_env.sim) - points
     assert np.abs(moved).max() < 0.005
 
 
@@ -106,9 +106,9 @@ def test_ring_starts_hanging_on_the_hook(ring_env):
 def test_worlds_shift_the_pole_only(ring_env, world_idx):
     _, info = ring_env.reset(seed=0, options={"world_idx": world_idx})
     offset = RingTask.world_offsets[world_idx]
-    assert ring_env.data.body(POLE).xpos == pytest.approx(POLE_BASE + offset)
-    assert ring_env.data.geom(PEG1).xpos[1:] == pytest.approx([-0.13, HOOK_POS[2]])
-    assert ring_env.data.geom(PEG2).xpos[1:] == pytest.approx([-0.17, HOOK_POS[2]])
+    assert ring_env.sim.data.body(POLE).xpos == pytest.approx(POLE_BASE + offset)
+    assert ring_env.sim.data.geom(PEG1).xpos[1:] == pytest.approx([-0.13, HOOK_POS[2]])
+    assert ring_env.sim.data.geom(PEG2).xpos[1:] == pytest.approx([-0.17, HOOK_POS[2]])
     assert not info["is_success"]
 
 
@@ -122,7 +122,7 @@ def test_random_shift_is_bounded_planar_and_seeded(ring_env):
     positions = []
     for _ in range(2):
         ring_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
-        positions.append(ring_env.data.body(POLE).xpos.copy())
+        positions.append(ring_env.sim.data.body(POLE).xpos.copy())
     shift = positions[0] - nominal
     assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
     assert shift[2] == 0.0
@@ -131,7 +131,7 @@ def test_random_shift_is_bounded_planar_and_seeded(ring_env):
 
 def test_start_pose_is_rmbs(ring_env):
     obs, _ = ring_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(RingTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(RingTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 # (seed, world) of the random-action rollouts: the invariants must hold for each (one chaotic
@@ -147,14 +147,14 @@ def test_random_actions_keep_the_simulation_stable(ring_env, random_actions, see
     env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
     slide = np.concatenate(
         [
-            env.model.jnt_dofadr[env.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
+            env.sim.model.jnt_dofadr[env.sim.model.body(f"{RING}_{i}").jntadr[0]] + np.arange(3)
             for i in range(RingTask.num_segments + 1)
         ]
     )
     fastest = 0.0
     for _ in random_actions(env, steps=300, seed=seed):
-        fastest = max(fastest, float(np.abs(env.data.qvel[slide]).max()))
-    points = env.task.ring_points(env.model, env.data)
+        fastest = max(fastest, float(np.abs(env.sim.data.qvel[slide]).max()))
+    points = env.task.ring_points(env.sim)
     assert fastest < MAX_SPEED
     closed = np.vstack([points, points[:1]])
     edges = np.linalg.norm(np.diff(closed, axis=0), axis=1)
@@ -176,7 +176,7 @@ def test_catalog_lists_the_ring():
 @pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest pole
 def test_expert_puts_the_ring_on_the_pole(ring_env, run_expert, episode):
     info = run_expert(ring_env, RingExpert, episode)
-    points = ring_env.task.ring_points(ring_env.model, ring_env.data)
+    points = ring_env.task.ring_points(ring_env.sim)
     assert info["is_success"], f"episode {episode}: ring centre at {points.mean(axis=0)}"
 
 

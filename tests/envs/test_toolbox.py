@@ -17,9 +17,9 @@ def toolbox_env():
 
 
 def _place_toolbox(env: RmbEnv, offset_from_mat: tuple[float, float, float]) -> None:
-    qpos = env.data.joint(TOOLBOX).qpos
-    qpos[:3] = ToolboxTask.mat_pos + np.asarray(offset_from_mat)
-    mujoco.mj_kinematics(env.model, env.data)
+    qpos = env.sim.data.joint(TOOLBOX).qpos
+    qpos[:3] = ToolboxTask().mat_pos + np.asarray(offset_from_mat)
+    mujoco.mj_kinematics(env.sim.model, env.sim.data)
 
 
 @pytest.mark.parametrize(
@@ -36,24 +36,24 @@ def _place_toolbox(env: RmbEnv, offset_from_mat: tuple[float, float, float]) -> 
 def test_success_criterion(toolbox_env, offset, expected):
     toolbox_env.reset(seed=0)
     _place_toolbox(toolbox_env, offset)
-    assert toolbox_env.task.is_success(toolbox_env.model, toolbox_env.data) is expected
+    assert toolbox_env.task.is_success(toolbox_env.sim) is expected
 
 
 @pytest.mark.parametrize("world_idx", [0, 5])
 def test_worlds_shift_the_toolbox_only(toolbox_env, world_idx):
     _, info = toolbox_env.reset(seed=0, options={"world_idx": world_idx})
-    expected = ToolboxTask.toolbox_nominal_pos + ToolboxTask.world_offsets[world_idx]
-    assert toolbox_env.data.body(TOOLBOX).xpos == pytest.approx(expected)
-    assert toolbox_env.data.body(MAT).xpos == pytest.approx(ToolboxTask.mat_pos)
+    expected = ToolboxTask().toolbox_nominal_pos + ToolboxTask.world_offsets[world_idx]
+    assert toolbox_env.sim.data.body(TOOLBOX).xpos == pytest.approx(expected)
+    assert toolbox_env.sim.data.body(MAT).xpos == pytest.approx(ToolboxTask().mat_pos)
     assert not info["is_success"]
 
 
 def test_random_shift_is_bounded_planar_and_seeded(toolbox_env):
-    nominal = ToolboxTask.toolbox_nominal_pos + ToolboxTask.world_offsets[3]
+    nominal = ToolboxTask().toolbox_nominal_pos + ToolboxTask.world_offsets[3]
     positions = []
     for _ in range(2):
         toolbox_env.reset(seed=7, options={"world_idx": 3, "random_shift": 0.03})
-        positions.append(toolbox_env.data.body(TOOLBOX).xpos.copy())
+        positions.append(toolbox_env.sim.data.body(TOOLBOX).xpos.copy())
     shift = positions[0] - nominal
     assert np.all(np.abs(shift[:2]) <= 0.03) and np.any(np.abs(shift[:2]) > 1e-4)
     assert shift[2] == 0.0  # the box starts on the table, not in or above it
@@ -62,16 +62,16 @@ def test_random_shift_is_bounded_planar_and_seeded(toolbox_env):
 
 def test_start_pose_is_rmbs(toolbox_env):
     obs, _ = toolbox_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(ToolboxTask.home_arm_qpos, abs=1e-6)
+    assert obs["agent_pos"][:6] == pytest.approx(ToolboxTask.start_poses["ur5e"][0], abs=1e-6)
 
 
 def test_toolbox_rests_stably(toolbox_env):
     toolbox_env.reset(seed=0, options={"world_idx": 0})
-    start = toolbox_env.data.body(TOOLBOX).xpos.copy()
+    start = toolbox_env.sim.data.body(TOOLBOX).xpos.copy()
     for _ in range(100):
         toolbox_env.step(toolbox_env.home_command.astype(np.float32))
-    assert np.all(np.isfinite(toolbox_env.data.qpos))
-    assert toolbox_env.data.body(TOOLBOX).xpos == pytest.approx(start, abs=1e-3)
+    assert np.all(np.isfinite(toolbox_env.sim.data.qpos))
+    assert toolbox_env.sim.data.body(TOOLBOX).xpos == pytest.approx(start, abs=1e-3)
 
 
 def test_catalog_lists_the_toolbox():
@@ -81,8 +81,10 @@ def test_catalog_lists_the_toolbox():
 @pytest.mark.parametrize("world", [0, 5])
 def test_expert_places_the_toolbox_on_the_mat(toolbox_env, run_expert, world):
     info = run_expert(toolbox_env, ToolboxExpert, world)  # seed = world
-    upright = toolbox_env.data.body(TOOLBOX).xmat.reshape(3, 3)[2, 2]
-    assert info["is_success"], f"world {world}: toolbox at {toolbox_env.data.body(TOOLBOX).xpos}"
+    upright = toolbox_env.sim.data.body(TOOLBOX).xmat.reshape(3, 3)[2, 2]
+    assert info["is_success"], (
+        f"world {world}: toolbox at {toolbox_env.sim.data.body(TOOLBOX).xpos}"
+    )
     assert upright > np.cos(np.deg2rad(5.0))
 
 
