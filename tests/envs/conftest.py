@@ -90,21 +90,3 @@ def random_actions():
     Which objects get hit, and how, is chaotic (CPUs differ in MuJoCo's last bits), so a
     stability test checks its invariants over several seeds and worlds, never one rollout."""
     return _random_actions
-
-
-def _random_rollout(env: RmbEnv, seed: int, steps: int = 30) -> np.ndarray:
-    env.reset(seed=seed, options={"random_shift": 0.03})
-    rng = np.random.default_rng(seed)
-    for _ in range(steps):
-        action = env.home_command + rng.normal(0.0, 0.05, 7)
-        action[-1] = 255.0 * rng.random()
-        env.step(action.astype(np.float32))
-    return env.sim.data.qpos.copy()
-
-
-@pytest.fixture
-def random_rollout():
-    """``random_rollout(env, seed, steps=30) -> qpos``: reset with ``seed`` (random world and
-    shift), then small seeded random moves around the home pose with random gripper commands;
-    the final qpos, for determinism tests."""
-    return _random_rollout

@@ -4,8 +4,6 @@ import mujoco
 import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.catalog import EXPERTS, TASKS
-from rmb_lerobot.envs.experts.cloth import ClothExpert
 from rmb_lerobot.envs.tasks.cloth import (
     BOARD,
     BOARD_HALF_SIZE,
@@ -155,11 +153,6 @@ def test_random_shift_is_bounded_three_dimensional_and_seeded(cloth_env):
     assert positions[1] == pytest.approx(positions[0])
 
 
-def test_start_pose_is_rmbs(cloth_env):
-    obs, _ = cloth_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(ClothTask.start_poses["ur5e"][0], abs=1e-6)
-
-
 def _edge_lengths(env: RmbEnv) -> np.ndarray:
     flex = mujoco.mj_name2id(env.sim.model, mujoco.mjtObj.mjOBJ_FLEX, CLOTH)
     start, count = env.sim.model.flex_edgeadr[flex], env.sim.model.flex_edgenum[flex]
@@ -202,25 +195,3 @@ def test_random_actions_keep_the_simulation_stable(cloth_env, random_actions, se
     assert np.percentile(stretch, 90) < 1.4  # the heavy cloth pressed against the board
     assert settled < 1.25
     assert np.linalg.norm(top_row - board, axis=1).max() < 0.25  # still hanging from the board
-
-
-def test_same_seed_same_rollout(cloth_env, random_rollout):
-    first = random_rollout(cloth_env, seed=3)
-    cloth_env.reset(seed=4)
-    assert np.array_equal(random_rollout(cloth_env, seed=3), first)
-
-
-def test_catalog_lists_the_cloth():
-    assert TASKS["cloth"] is ClothTask and EXPERTS["cloth"] is ClothExpert
-
-
-@pytest.mark.parametrize("episode", [0, 5])  # the cloth nearest the robot's right and left
-def test_expert_lifts_the_cloth_onto_the_board(cloth_env, run_expert, episode):
-    info = run_expert(cloth_env, ClothExpert, episode)
-    points = cloth_env.task.cloth_points(cloth_env.sim)
-    assert info["is_success"], f"episode {episode}: lowest cloth point at {points[:, 2].min()}"
-
-
-def test_expert_in_eef_rel_mode(make_env, run_expert):
-    env = make_env(ClothTask(), action_mode="eef_rel")
-    assert run_expert(env, ClothExpert, 3)["is_success"]

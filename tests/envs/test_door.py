@@ -4,7 +4,6 @@ import mujoco
 import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.experts.door import DoorExpert
 from rmb_lerobot.envs.tasks.door import DOOR, DoorTask
 
 
@@ -29,20 +28,3 @@ def test_worlds_shift_the_door(door_env, world_idx):
     expected = DoorTask().door_nominal_pos + DoorTask.world_offsets[world_idx]
     assert door_env.sim.data.body(DOOR).xpos == pytest.approx(expected)
     assert door_env.sim.data.joint(DOOR).qpos[0] == 0.0
-
-
-def test_start_pose_is_rmbs(door_env):
-    obs, _ = door_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(DoorTask.start_poses["ur5e"][0], abs=1e-6)
-
-
-def test_expert_opens_the_door(door_env):
-    expert = DoorExpert(door_env)
-    for world in (1, 4):
-        obs, _ = door_env.reset(seed=world, options={"world_idx": world, "random_shift": 0.02})
-        expert.reset()
-        for _ in range(door_env.task.max_episode_steps):
-            obs, _, terminated, _, info = door_env.step(expert(obs))
-            if terminated:
-                break
-        assert info["is_success"], f"world {world}: door at {door_env.sim.data.joint(DOOR).qpos}"

@@ -23,9 +23,9 @@ def run(env, actions, seed, options=None):
     return np.array(trace), env.sim.data.body(HOLE).xpos.copy()
 
 
-@pytest.mark.parametrize("mode", ["joint", "eef_abs", "eef_rel"])
+@pytest.mark.parametrize("mode", ["eef_abs", "eef_rel"])  # joint: every env, test_contract.py
 def test_env_checker_passes(mode):
-    cameras = ("front",) if mode == "joint" else ()
+    cameras = ()
     env = RmbEnv(InsertTask(), action_mode=mode, cameras=cameras, image_size=(32, 24), depth=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # advice on unbounded/unnormalised boxes
@@ -44,16 +44,6 @@ def test_contract_attributes(camera_env):
     assert info["is_success"] is False
     _, reward, terminated, truncated, info = camera_env.step(camera_env.home_command)
     assert "is_success" in info and reward == 0.0 and not terminated and not truncated
-
-
-def test_same_seed_same_episode(physics_env):
-    rng = np.random.default_rng(0)
-    actions = physics_env.home_command + rng.normal(0, 0.05, (15, 7)) * [1, 1, 1, 1, 1, 1, 0]
-    a = run(physics_env, actions, seed=3, options={"random_shift": 0.02})
-    b = run(physics_env, actions, seed=3, options={"random_shift": 0.02})
-    c = run(physics_env, actions, seed=4, options={"random_shift": 0.02})
-    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
-    assert not np.array_equal(a[1], c[1])
 
 
 @pytest.mark.parametrize("world_idx", range(6))

@@ -4,8 +4,6 @@ import mujoco
 import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.catalog import EXPERTS, TASKS
-from rmb_lerobot.envs.experts.particle import ParticleExpert
 from rmb_lerobot.envs.tasks.particle import (
     CASE_HEIGHT,
     GOAL,
@@ -116,11 +114,6 @@ def test_random_shift_is_bounded_planar_and_seeded(particle_env):
     assert positions[1] == pytest.approx(positions[0])
 
 
-def test_start_pose_is_rmbs(particle_env):
-    obs, _ = particle_env.reset(seed=0)
-    assert obs["agent_pos"][:6] == pytest.approx(ParticleTask.start_poses["ur5e"][0], abs=1e-6)
-
-
 def test_resting_particles_stay_put_and_fall_asleep(particle_env):
     particle_env.reset(seed=0, options={"world_idx": 1})
     task, model, data = particle_env.task, particle_env.sim.model, particle_env.sim.data
@@ -154,26 +147,3 @@ def test_random_actions_keep_the_simulation_stable(particle_env, random_actions,
     assert fastest < MAX_SPEED
     assert np.all(np.abs(particles[:, :2]) < 2.0)  # still near the table (or on the floor)
     assert np.all(particles[:, 2] > PARTICLE_RADIUS - 0.005)  # none fell through anything
-
-
-def test_same_seed_same_rollout(particle_env, random_rollout):
-    first = random_rollout(particle_env, seed=3)
-    # Another episode in between: its sleeping state must not leak into the next.
-    random_rollout(particle_env, seed=4)
-    assert np.array_equal(random_rollout(particle_env, seed=3), first)
-
-
-def test_catalog_lists_the_particle_task():
-    assert TASKS["particle"] is ParticleTask and EXPERTS["particle"] is ParticleExpert
-
-
-@pytest.mark.parametrize("episode", [0, 5])  # the nearest and the farthest source
-def test_expert_scoops_particles_into_the_goal(particle_env, run_expert, episode):
-    info = run_expert(particle_env, ParticleExpert, episode)
-    positions = particle_env.task.particle_positions(particle_env.sim)
-    assert info["is_success"], f"episode {episode}: {count_in_goal(positions, GOAL_CENTRE)} in"
-
-
-def test_expert_in_eef_rel_mode(make_env, run_expert):
-    env = make_env(ParticleTask(), action_mode="eef_rel")
-    assert run_expert(env, ParticleExpert, 3)["is_success"]

@@ -4,7 +4,6 @@ import mujoco
 import numpy as np
 import pytest
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 from rmb_lerobot.envs.collect import CollectConfig, collect
 from rmb_lerobot.envs.experts.pick import PickExpert
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
@@ -167,10 +166,6 @@ def test_random_actions_keep_the_simulation_stable(pick_env, random_actions, see
     assert min(heights) > -0.005  # nothing sank into the table or the floor
 
 
-def test_catalog_lists_pick():
-    assert TASKS["pick"] is PickTask and EXPERTS["pick"] is PickExpert
-
-
 @pytest.mark.parametrize(
     ("seed", "instruction"),
     [(0, "Put the cracker box in the black basket."), (5, "Put the banana in the blue basket.")],
@@ -181,12 +176,6 @@ def test_expert_puts_the_named_object_in_the_named_basket(pick_env, run_expert, 
     assert info["is_success"], (
         f"{instruction}: {pick_env.sim.data.body(task.target_object.body).xpos}"
     )
-
-
-def test_expert_in_eef_rel_mode(make_env, run_expert):
-    env = make_env(PickTask(), action_mode="eef_rel")
-    info = run_expert(env, PickExpert, 3, instruction="Put the apple in the black basket.")
-    assert info["is_success"]
 
 
 def test_collect_can_cover_every_instruction_evenly(tmp_path):

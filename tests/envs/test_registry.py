@@ -2,7 +2,6 @@
 
 import dataclasses
 
-import gymnasium as gym
 import pytest
 from rmb_lerobot.converters.plan import robot_type_of
 from rmb_lerobot.envs import registry
@@ -82,18 +81,3 @@ def test_unknown_env_names_list_the_known_ones():
         ValueError, match=r"unknown RMB environment 'MujocoUR5eFly'.*MujocoUR5eInsert"
     ):
         entry_for("MujocoUR5eFly")
-
-
-@pytest.mark.parametrize("name", sorted(ENVS))
-def test_gymnasium_make_after_importing_the_package(name):
-    entry = ENVS[name]
-    env = gym.make(entry.gym_id, cameras=())
-    try:
-        obs, info = env.reset(seed=0, options={"world_idx": 2})
-        assert info["world_idx"] == 2 and "agent_pos" in obs
-        assert env.spec.id == entry.gym_id
-        assert (
-            env.get_wrapper_attr("_max_episode_steps") == entry.load_task_class().max_episode_steps
-        )
-    finally:
-        env.close()
