@@ -128,15 +128,24 @@ def _load(target: str) -> Any:
     return getattr(importlib.import_module(module), name)
 
 
-def _entry(task: str, task_class: str, expert_class: str, robot: str = "ur5e") -> EnvEntry:
+def _entry(
+    task: str,
+    task_class: str,
+    expert_class: str,
+    robot: str = DEFAULT_ROBOT,
+    workspace: Workspace = RMB_TABLE,
+) -> EnvEntry:
+    """A MuJoCo entry whose task and expert live in ``tasks/<module>.py``/``experts/<module>.py``
+    (the task name up to its first ``_``: cabinet_hinge and cabinet_slide share a module)."""
     tasks, experts = "rmb_lerobot.envs.tasks", "rmb_lerobot.envs.experts"
-    module = task.split("_")[0]  # cabinet_hinge and cabinet_slide share a module
+    module = task.split("_")[0]
     return EnvEntry(
         "mujoco",
         robot,
         task,
         f"{tasks}.{module}:{task_class}",
         f"{experts}.{module}:{expert_class}",
+        workspace,
     )
 
 

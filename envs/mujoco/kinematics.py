@@ -9,10 +9,19 @@ every iteration; it is what the end-effector action modes and the scripted exper
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import mujoco
 import numpy as np
-from rmb_lerobot.envs.mujoco.robot import RobotSpec
+
+
+class ArmNames(Protocol):
+    """The MuJoCo names kinematics needs of one arm (an ``ArmModel`` of
+    :mod:`rmb_lerobot.envs.mujoco.models.common`, or a ``RobotSpec``)."""
+
+    arm_joints: tuple[str, ...]
+    root_body: str
+    eef_site: str
 
 
 @dataclass(frozen=True)
@@ -41,7 +50,7 @@ def _rotvec(quat: np.ndarray) -> np.ndarray:
 class ArmKinematics:
     """FK/IK of one robot's arm inside a compiled scene model."""
 
-    def __init__(self, model: mujoco.MjModel, robot: RobotSpec):
+    def __init__(self, model: mujoco.MjModel, robot: ArmNames):
         self.model = model
         self.robot = robot
         self._data = mujoco.MjData(model)
