@@ -24,6 +24,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+
 from rmb_lerobot.envs.registry import ENVS
 
 MODES = ("joint", "eef_rel")

@@ -38,13 +38,13 @@ from pathlib import Path
 
 import numpy as np
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+from rmb_lerobot import EpisodeWriter, find_episodes, open_episode
+from rmb_lerobot import keys as K
 from rmb_lerobot.converters import ConvertOptions, to_lerobot
 from rmb_lerobot.converters.copy import COPY
 from rmb_lerobot.converters.plan import plan_conversion
 from rmb_lerobot.converters.write import quiet_depth_encoder
-
-from rmb_lerobot import EpisodeWriter, find_episodes, open_episode
-from rmb_lerobot import keys as K
 from rmb_lerobot.kinematics import UR5E
 from rmb_lerobot.synthetic import ur5e_attrs, ur5e_steps
 

@@ -26,9 +26,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from rmb_lerobot.envs.registry import entry_for
-
 from rmb_lerobot.cli.quickstart import ACT_CPU_ARGS, Stage, run
+from rmb_lerobot.envs.registry import entry_for
 
 WORLDS = range(6)
 SIZE = 64

@@ -39,12 +39,12 @@ from pathlib import Path
 
 import numpy as np
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
-from rmb_lerobot.converters.copy import COPY
 
 from rmb_lerobot import EpisodeWriter, find_episodes, open_episode
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
+from rmb_lerobot.converters.copy import COPY
 from rmb_lerobot.kinematics import UR5E
 from rmb_lerobot.synthetic import UR5E_CONTROL_HZ, ur5e_attrs, ur5e_steps
 

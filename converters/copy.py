@@ -23,9 +23,9 @@ from pathlib import Path
 import av
 import numpy as np
 from av.bitstream import BitStreamFilterContext
-from rmb_lerobot.converters.plan import ConversionPlan
 
 from rmb_lerobot import keys as K
+from rmb_lerobot.converters.plan import ConversionPlan
 from rmb_lerobot.episode import EpisodeFormat, episode_format
 from rmb_lerobot.episode.layout import rgb_video_path
 from rmb_lerobot.errors import RmbFormatError

@@ -32,6 +32,7 @@ from lerobot.datasets import dataset_writer
 from lerobot.datasets.compute_stats import RunningQuantileStats, auto_downsample_height_width
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
 from lerobot.datasets.video_utils import StreamingVideoEncoder
+
 from rmb_lerobot.converters.copy import remux
 from rmb_lerobot.converters.rate import exact_rate
 from rmb_lerobot.converters.stats import finite_episode_stats

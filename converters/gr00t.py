@@ -13,10 +13,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from rmb_lerobot.converters.schema import DatasetSchema, uses_policy_view
-
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters.schema import DatasetSchema, uses_policy_view
 
 TASK_ANNOTATION = "human.task_description"
 _TASK_INDEX = "task_index"  # LeRobot's per-frame task column

@@ -27,10 +27,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from lerobot.utils.constants import DEFAULT_FEATURES, REWARD
-from rmb_lerobot.converters.components import split_by_prefix
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters.components import split_by_prefix
 
 logger = logging.getLogger(__name__)
 

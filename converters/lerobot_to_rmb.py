@@ -19,6 +19,9 @@ from typing import Any
 
 import numpy as np
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.converters.atomic import prepare_destination, staged_output
 from rmb_lerobot.converters.attrs import checked_attrs
 from rmb_lerobot.converters.lerobot_frames import CHUNK, image_column_frames, iter_video_frames
@@ -31,9 +34,6 @@ from rmb_lerobot.converters.lerobot_mapping import (
 from rmb_lerobot.converters.metadata import read_rmb_metadata
 from rmb_lerobot.converters.progress import Bars
 from rmb_lerobot.converters.schema import uses_policy_view
-
-from rmb_lerobot import keys as K
-from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter
 from rmb_lerobot.episode.validate import check_names_have_images
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError

@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rmb_lerobot.converters.plan import ConversionPlan
 
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters.plan import ConversionPlan
 
 SCHEMA_VERSION = 1
 

@@ -21,13 +21,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from rmb_lerobot import keys as K
 from rmb_lerobot.converters.attrs import checked_attrs
 from rmb_lerobot.converters.cast import to_float32
 from rmb_lerobot.converters.rate import nominal_rate, same_rate
 from rmb_lerobot.converters.schema import DatasetSchema, build_schema
 from rmb_lerobot.envs.registry import robot_for_env_attr
-
-from rmb_lerobot import keys as K
 from rmb_lerobot.episode import Episode, open_episode
 from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError

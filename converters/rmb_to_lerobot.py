@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from lerobot.utils.constants import HF_LEROBOT_HOME
+
 from rmb_lerobot.converters.atomic import prepare_destination, staged_output
 from rmb_lerobot.converters.copy import COPY, check_copyable
 from rmb_lerobot.converters.gr00t import write_modality
@@ -23,7 +24,6 @@ from rmb_lerobot.converters.progress import Bars
 from rmb_lerobot.converters.shards import write_sharded
 from rmb_lerobot.converters.stats import refresh_finite_stats
 from rmb_lerobot.converters.write import VideoSettings, finish_metadata, write_dataset
-
 from rmb_lerobot.episode import find_episodes
 
 logger = logging.getLogger(__name__)

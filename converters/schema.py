@@ -17,12 +17,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from rmb_lerobot.converters.cast import to_float32
-from rmb_lerobot.converters.components import component_names, infer_layout, stored_dim
-from rmb_lerobot.converters.skip import skip_sequence
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters.cast import to_float32
+from rmb_lerobot.converters.components import component_names, infer_layout, stored_dim
+from rmb_lerobot.converters.skip import skip_sequence
 from rmb_lerobot.pose import POSE_DIM, pose_to_policy
 
 FLOAT = "float32"

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from lerobot.datasets.aggregate import aggregate_datasets
+
 from rmb_lerobot.converters.plan import ConversionPlan, EpisodeSource
 from rmb_lerobot.converters.progress import Progress, QueueProgress, forward
 from rmb_lerobot.converters.write import VideoSettings, write_dataset

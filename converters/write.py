@@ -24,14 +24,14 @@ import av
 import numpy as np
 from lerobot.configs import DepthEncoderConfig, RGBEncoderConfig, depth_encoder_defaults
 from lerobot.datasets.io_utils import load_info, write_info
+
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.converters.copy import COPY, COPYABLE_CODEC
 from rmb_lerobot.converters.encoder import ConversionDataset
 from rmb_lerobot.converters.plan import ConversionPlan, EpisodeSource, open_source
 from rmb_lerobot.converters.progress import Progress
 from rmb_lerobot.converters.rate import lerobot_fps
-
-from rmb_lerobot import keys as K
-from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.episode.layout import rgb_video_path
 from rmb_lerobot.errors import RmbFormatError
 

@@ -25,8 +25,8 @@ from typing import ClassVar
 
 import gymnasium as gym
 import numpy as np
-from rmb_lerobot.envs.robots import Robot
 
+from rmb_lerobot.envs.robots import Robot
 from rmb_lerobot.pose import POLICY_POSE_DIM, REL_POSE_DIM, apply_relative_pose, policy_to_pose
 
 # Per-step bounds of the eef action spaces (root frame, metres / radians).

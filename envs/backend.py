@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from rmb_lerobot.envs.robots import Robot
 from rmb_lerobot.envs.workspace import Workspace
 

@@ -16,15 +16,15 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
+
+from rmb_lerobot import keys as K
+from rmb_lerobot.codecs.depth_base import metres_to_mm
 from rmb_lerobot.envs.actions import ACTION_MODES, CommandState, make_action_mode
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.registry import SIMULATORS, rmb_env_name
 from rmb_lerobot.envs.robots import Robot, robot_for
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import Workspace
-
-from rmb_lerobot import keys as K
-from rmb_lerobot.codecs.depth_base import metres_to_mm
 
 __all__ = ["ACTION_MODES", "DEFAULT_IMAGE_SIZE", "RMB_IMAGE_SIZE", "RmbEnv", "make_backend"]
 

@@ -31,7 +31,6 @@ from rmb_lerobot.envs.interrupts import (
     recording,
 )
 from rmb_lerobot.envs.registry import entry_for
-
 from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter
 from rmb_lerobot.episode.writer import remove_legacy_temporaries
 from rmb_lerobot.staging import remove_stale

@@ -16,10 +16,10 @@ import numpy as np
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import OBS_STR
-from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, make_env
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, make_env
 from rmb_lerobot.pose import POLICY_POSE_DIM, REL_POSE_DIM
 
 # RMB's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).

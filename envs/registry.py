@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
+
 from rmb_lerobot.envs.robots import ROBOTS, Robot
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 

@@ -17,9 +17,9 @@ import time
 import traceback
 
 import numpy as np
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
 
 from rmb_lerobot import open_episode
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
 from rmb_lerobot.errors import RmbFormatError
 
 

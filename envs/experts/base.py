@@ -23,10 +23,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from rmb_lerobot.envs.backend import Backend
-from rmb_lerobot.envs.base import RmbEnv
 from scipy.spatial.transform import Rotation
 
+from rmb_lerobot.envs.backend import Backend
+from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.pose import pose_to_policy, relative_pose
 
 

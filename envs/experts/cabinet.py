@@ -21,6 +21,8 @@ from enum import Enum
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
 from rmb_lerobot.envs.tasks.cabinet import (
     CABINET,
@@ -32,7 +34,6 @@ from rmb_lerobot.envs.tasks.cabinet import (
     LID,
     SLIDE,
 )
-from scipy.spatial.transform import Rotation
 
 # The closed Robotiq 2F-85's fingertip block, measured on the model in the pinch-site frame
 # (x across the pads, y the closing direction, z the tool axis): the pads reach PAD_TIP beyond

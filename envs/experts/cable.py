@@ -27,9 +27,10 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.cable import CABLE_END, END_BOX_HALF_SIZE, POLE1, POLE2
-from scipy.spatial.transform import Rotation
 
 UP, RIGHT, DOWN = np.pi / 2, 0.0, -np.pi / 2  # box headings (yaw of its cable-to-end axis)
 

@@ -29,9 +29,10 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint
 from rmb_lerobot.envs.tasks.cloth import BOARD, BOARD_HALF_SIZE, CLOTH_COLUMNS, CLOTH_ROWS
-from scipy.spatial.transform import Rotation
 
 
 class Phase(Enum):

@@ -15,9 +15,10 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
 from rmb_lerobot.envs.tasks.door import DOOR, DOOR_LEAF, HANDLE_BAR_X
-from scipy.spatial.transform import Rotation
 
 
 class Phase(Enum):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+
 from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
 from rmb_lerobot.envs.tasks.insert import HOLE, HOLE_DEPTH, PEG, PEG_HALF_LENGTH
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.particle import (
     CASE_WALL_HALF_THICKNESS,
@@ -34,7 +36,6 @@ from rmb_lerobot.envs.tasks.particle import (
     SOURCE,
     SOURCE_HALF_SIDE,
 )
-from scipy.spatial.transform import Rotation
 
 PAD_HALF_WIDTH = 0.011  # the Robotiq 2F-85's finger pads, across the closing direction (m)
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.pick import FINGER_REACH, PickTask, best_grasp_yaw, grasp_yaws
 

@@ -21,9 +21,10 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.ring import POLE, POLE_HEIGHT, RING_RADIUS, TUBE_RADIUS
-from scipy.spatial.transform import Rotation
 
 
 class Phase(Enum):

@@ -16,9 +16,10 @@ from __future__ import annotations
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
 from rmb_lerobot.envs.tasks.toolbox import HANDLE, MAT, MAT_TOP, TOOLBOX
-from scipy.spatial.transform import Rotation
 
 
 class Phase(Enum):

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR

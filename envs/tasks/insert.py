@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.tasks.base import StartPoses, Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 

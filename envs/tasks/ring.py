@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.tasks.base import StartPoses, Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 

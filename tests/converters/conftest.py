@@ -10,6 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+
 from rmb_lerobot.converters import ConvertOptions, to_lerobot
 from rmb_lerobot.envs.collect import CollectConfig, collect
 

@@ -9,12 +9,12 @@ import h5py
 import numpy as np
 import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
-from rmb_lerobot.converters.encoder import ConversionDataset
 
 from rmb_lerobot import EpisodeWriter, RmbFormatError, find_episodes
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
+from rmb_lerobot.converters.encoder import ConversionDataset
 
 
 def _convert(src, dest, **options):

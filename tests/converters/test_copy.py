@@ -7,10 +7,10 @@ import shutil
 import numpy as np
 import pytest
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
 
 from rmb_lerobot import RmbFormatError, find_episodes, open_episode, switch_format
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
 
 
 def _copy(sources, root, **options):

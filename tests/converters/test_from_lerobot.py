@@ -8,10 +8,10 @@ import pyarrow.parquet as pq
 import pytest
 from lerobot.configs import DepthEncoderConfig, RGBEncoderConfig
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters import MappingOverrides, from_lerobot
 
 from rmb_lerobot import RmbFormatError, find_episodes, open_episode
 from rmb_lerobot import keys as K
+from rmb_lerobot.converters import MappingOverrides, from_lerobot
 
 # Bounds measured on the 32x32 demos (AV1 CRF 30 in LeRobot, then H.264 CRF 23 in the .rmb):
 # about 32 dB; depth goes through LeRobot's 12-bit log quantisation (<= 1.65 mm at 3.5 m).

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import huggingface_hub
 import pytest
-from rmb_lerobot.converters import ConvertOptions, push_dataset, to_lerobot
 
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.cli.convert import main
+from rmb_lerobot.converters import ConvertOptions, push_dataset, to_lerobot
 
 
 class FakeHub:

@@ -18,13 +18,13 @@ from lerobot.configs import DepthEncoderConfig
 from lerobot.datasets import dataset_writer, video_utils
 from lerobot.datasets.lerobot_dataset import LeRobotDataset, LeRobotDatasetMetadata
 from lerobot.scripts import lerobot_dataset_viz as viz
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
-from rmb_lerobot.converters.skip import skip_sequence
-from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
 
 from rmb_lerobot import find_episodes, open_episode
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
+from rmb_lerobot.converters.skip import skip_sequence
+from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
 from rmb_lerobot.pose import pose_to_policy
 
 CAMERAS = ("front", "hand")  # what the demos fixture records

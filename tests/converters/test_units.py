@@ -6,14 +6,14 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.converters.components import component_names, infer_layout, split_by_prefix
 from rmb_lerobot.converters.lerobot_mapping import parse_key_dims, resolve_mapping
 from rmb_lerobot.converters.rate import exact_rate, lerobot_fps, nominal_rate, same_rate
 from rmb_lerobot.converters.shards import split
 from rmb_lerobot.converters.skip import skip_sequence
-
-from rmb_lerobot import keys as K
-from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.pose import relative_pose, relative_pose_sequence
 

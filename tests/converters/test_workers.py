@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 from lerobot.datasets.lerobot_dataset import LeRobotDataset
-from rmb_lerobot.converters import ConvertOptions, to_lerobot
 
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.converters import ConvertOptions, to_lerobot
 
 
 def test_two_workers_write_the_same_dataset(demos, converted_depth, tmp_path, hidden_entries):

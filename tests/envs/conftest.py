@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.tasks.insert import InsertTask
 

@@ -4,9 +4,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.actions import ACTION_MODES, CommandState, make_action_mode
 from rmb_lerobot.envs.robots import UR5E, Robot
-
 from rmb_lerobot.pose import apply_relative_pose
 
 DUAL = Robot(

@@ -3,6 +3,7 @@
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.tasks.cabinet import (
     CABINET,

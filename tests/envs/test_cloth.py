@@ -3,6 +3,8 @@
 import mujoco
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
+
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.tasks.cloth import (
     BOARD,
@@ -15,7 +17,6 @@ from rmb_lerobot.envs.tasks.cloth import (
     board_corners,
     cloth_on_board,
 )
-from scipy.spatial.transform import Rotation
 
 NUM_POINTS = CLOTH_ROWS * CLOTH_COLUMNS
 BOARD_ROT = Rotation.from_euler("z", ClothTask.board_yaw).as_matrix()

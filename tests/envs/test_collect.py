@@ -6,12 +6,12 @@ import time
 
 import numpy as np
 import pytest
-from rmb_lerobot.envs.collect import CollectConfig, collect
-from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
 
 from rmb_lerobot import find_episodes, open_episode
 from rmb_lerobot import keys as K
 from rmb_lerobot.cli.collect import main
+from rmb_lerobot.envs.collect import CollectConfig, collect
+from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
 
 SMALL = ["--cameras", "front", "hand", "--image-size", "48", "32"]
 

@@ -19,13 +19,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
-from rmb_lerobot.envs.registry import ENVS
 
 import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
+from rmb_lerobot.envs.registry import ENVS
 
 NAMES = sorted(ENVS)
 EXPERT_EPISODES = (0, 3, 5)  # seeds; worlds 0, 3, 5 (nearest, middle, farthest objects)

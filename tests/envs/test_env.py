@@ -5,11 +5,11 @@ import warnings
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.tasks.insert import HOLE, InsertTask
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import open_episode
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.tasks.insert import HOLE, InsertTask
 from rmb_lerobot.episode import EpisodeWriter
 from rmb_lerobot.pose import pose_to_policy
 

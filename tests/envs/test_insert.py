@@ -3,8 +3,9 @@
 import mujoco
 import numpy as np
 import pytest
-from rmb_lerobot.envs.tasks.insert import HOLE, PEG, PEG_HALF_LENGTH
 from scipy.spatial.transform import Rotation
+
+from rmb_lerobot.envs.tasks.insert import HOLE, PEG, PEG_HALF_LENGTH
 
 
 def place_peg(env, dxy=(0.0, 0.0), end_height=0.005, tilt_deg=0.0):

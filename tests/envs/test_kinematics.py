@@ -4,9 +4,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
 from rmb_lerobot.envs.mujoco.robot import UR5E_2F85
-
 from rmb_lerobot.kinematics import UR5E
 from rmb_lerobot.pose import quat_to_rotmat
 

@@ -7,10 +7,10 @@ import sys
 import numpy as np
 import pytest
 from lerobot.envs.configs import EnvConfig
-from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS, action_dim
-from rmb_lerobot.envs.registry import ENVS
 
 import lerobot_env_rmb  # noqa: F401 - what LeRobot's plugin discovery imports
+from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS, action_dim
+from rmb_lerobot.envs.registry import ENVS
 from rmb_lerobot.registration import registered_env_types
 
 

@@ -3,6 +3,7 @@
 import dataclasses
 
 import pytest
+
 from rmb_lerobot.envs.mujoco.robots import build_robot_model, build_ur5e, check_model
 from rmb_lerobot.envs.robots import UR5E, Gripper
 

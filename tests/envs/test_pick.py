@@ -3,6 +3,8 @@
 import mujoco
 import numpy as np
 import pytest
+
+from rmb_lerobot import open_episode
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.collect import CollectConfig, collect
 from rmb_lerobot.envs.experts.pick import PickExpert
@@ -15,8 +17,6 @@ from rmb_lerobot.envs.tasks.pick import (
     best_grasp_yaw,
     layout_is_clear,
 )
-
-from rmb_lerobot import open_episode
 
 BANANA, CRACKER_BOX = OBJECTS[0], OBJECTS[1]
 BLUE, BLACK = BASKETS

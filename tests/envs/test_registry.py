@@ -3,14 +3,14 @@
 import dataclasses
 
 import pytest
+
+import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
+from rmb_lerobot import keys as K
 from rmb_lerobot.converters.plan import robot_type_of
 from rmb_lerobot.envs import registry
 from rmb_lerobot.envs.catalog import EXPERTS, TASKS
 from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, robot_for_env_attr
 from rmb_lerobot.envs.robots import UR5E
-
-import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
-from rmb_lerobot import keys as K
 
 
 def test_names_follow_rmb_and_the_issue():

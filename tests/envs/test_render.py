@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
 from rmb_lerobot.envs.workspace import RMB_TABLE
 

@@ -15,6 +15,7 @@ import time
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.mujoco import meshes
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer

@@ -4,9 +4,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from rmb_lerobot.envs.robots import ROBOTS, UR5E, Arm, Gripper, HandCamera, Pose, Robot, robot_for
 
 from rmb_lerobot import keys as K
+from rmb_lerobot.envs.robots import ROBOTS, UR5E, Arm, Gripper, HandCamera, Pose, Robot, robot_for
 
 
 def _arm(name: str, joints: int, gripper: Gripper, camera: str | None = None) -> Arm:

@@ -25,10 +25,11 @@ from lerobot.configs import RGBEncoderConfig, depth_encoder_defaults
 from lerobot.datasets import LeRobotDataset
 from lerobot.policies.factory import make_pre_post_processors
 from lerobot.policies.pretrained import PreTrainedPolicy
+from safetensors.torch import load_file
+
 from rmb_lerobot.policies_extra.dp3 import DP3Policy
 from rmb_lerobot.policies_extra.mlp import MLPPolicy
 from rmb_lerobot.policies_extra.sarnn import SARNNPolicy
-from safetensors.torch import load_file
 
 STATE_DIM = ACTION_DIM = 7
 SIZE = 32

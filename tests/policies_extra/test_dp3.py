@@ -16,10 +16,10 @@ from lerobot.configs.types import FeatureType, NormalizationMode, PolicyFeature
 from lerobot.datasets import LeRobotDataset, LeRobotDatasetMetadata
 from lerobot.envs.utils import preprocess_observation
 from lerobot.policies.factory import get_policy_class, make_policy, make_pre_post_processors
+
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
 from rmb_lerobot.policies_extra.dp3 import DP3Config, DP3Policy
 from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds
-
 from rmb_lerobot.registration import registered_policy_types
 
 STATE_DIM = ACTION_DIM = 7

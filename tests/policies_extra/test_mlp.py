@@ -7,8 +7,8 @@ from lerobot.configs.policies import PreTrainedConfig
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.policies.factory import get_policy_class, make_pre_post_processors
 from lerobot.processor import make_default_pre_post_processors
-from rmb_lerobot.policies_extra.mlp import MLPConfig, MLPPolicy
 
+from rmb_lerobot.policies_extra.mlp import MLPConfig, MLPPolicy
 from rmb_lerobot.registration import registered_policy_types
 
 STATE_DIM = ACTION_DIM = 7  # as the ``features`` fixture

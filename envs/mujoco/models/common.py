@@ -15,6 +15,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.robot import FORCE_SENSOR, TORQUE_SENSOR
 
 ERD_DISTRIBUTION = "example-robot-data"

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.models.common import ArmModel, RobotModel, StandBox, Vec3
 from rmb_lerobot.envs.mujoco.robot import (

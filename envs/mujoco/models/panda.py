@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.models.common import (
     ArmModel,
     RobotModel,

@@ -25,6 +25,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import mujoco
+
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR, simplify_visual_meshes
 from rmb_lerobot.envs.mujoco.models import xarm_gripper
 from rmb_lerobot.envs.mujoco.models.common import (

@@ -25,6 +25,7 @@ import math
 
 import mujoco
 import numpy as np
+
 from rmb_lerobot.envs.mujoco.models.common import euler_quat
 
 ROOT_BODY = "xarm_gripper_base_link"

@@ -8,6 +8,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
 from rmb_lerobot.envs.mujoco.models.common import ArmModel, RobotModel
 from rmb_lerobot.envs.workspace import RMB_TABLE

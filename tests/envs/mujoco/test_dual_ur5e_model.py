@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.models.dual_ur5e import RMB_MOUNT_POS, build_dual_ur5e
 from rmb_lerobot.envs.mujoco.robot import UR5E_2F85, build_robot_spec
 from rmb_lerobot.envs.workspace import RMB_TABLE

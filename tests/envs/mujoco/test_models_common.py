@@ -9,6 +9,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.models import common
 from rmb_lerobot.envs.mujoco.models.panda import build_panda
 from rmb_lerobot.envs.mujoco.models.xarm7 import build_xarm7

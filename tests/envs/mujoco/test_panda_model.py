@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.models.panda import RMB_MOUNT_POS, build_panda
 from rmb_lerobot.envs.workspace import RMB_TABLE
 

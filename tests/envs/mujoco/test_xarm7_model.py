@@ -7,6 +7,7 @@ import functools
 import mujoco
 import numpy as np
 import pytest
+
 from rmb_lerobot.envs.mujoco.models import xarm_gripper
 from rmb_lerobot.envs.mujoco.models.common import rendered_mesh_faces
 from rmb_lerobot.envs.mujoco.models.xarm7 import HOME, build_xarm7
