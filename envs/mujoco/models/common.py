@@ -179,6 +179,26 @@ def add_servo(
     return act
 
 
+def add_arm_servos(
+    spec: mujoco.MjSpec,
+    joints: tuple[str, ...],
+    actuators: tuple[str, ...],
+    gains: tuple[tuple[float, float, float], ...],
+) -> None:
+    """One position servo per arm joint, ``(kp, kv, max force)`` each, commanding the joint's
+    own range (RMB's arm actuators)."""
+    for joint, actuator, (kp, kv, force) in zip(joints, actuators, gains, strict=True):
+        add_servo(
+            spec,
+            actuator,
+            joint,
+            kp=kp,
+            kv=kv,
+            ctrl_range=tuple(spec.joint(joint).range),
+            force_range=(-force, force),
+        )
+
+
 def add_render_twins(spec: mujoco.MjSpec, rgba: tuple[float, ...] | None = None) -> int:
     """Give every colliding, rendered mesh geom a render-only twin (group 2) and hide the
     original in group 3; returns how many. Physics is unchanged (same geoms collide, bodies

@@ -50,6 +50,7 @@ from rmb_lerobot.envs.mujoco.models.common import (
     RobotModel,
     StandBox,
     Vec3,
+    add_arm_servos,
     add_ft_sensor,
     add_servo,
     load_erd_urdf,
@@ -134,16 +135,7 @@ def build_panda(*, mount_pos: Vec3 = RMB_MOUNT_POS) -> RobotModel:
         if geom.contype or geom.conaffinity:
             geom.contype, geom.conaffinity = ROBOT_CONTYPE, ROBOT_CONAFFINITY
 
-    for joint, actuator, (kp, kv, force) in zip(JOINTS, ACTUATORS, _GAINS, strict=True):
-        add_servo(
-            spec,
-            actuator,
-            joint,
-            kp=kp,
-            kv=kv,
-            ctrl_range=tuple(spec.joint(joint).range),
-            force_range=(-force, force),
-        )
+    add_arm_servos(spec, JOINTS, ACTUATORS, _GAINS)
     add_servo(  # panda_config.xml lines 139-140
         spec,
         GRIPPER_ACTUATOR,

@@ -32,9 +32,9 @@ from rmb_lerobot.envs.mujoco.models.common import (
     ArmModel,
     RobotModel,
     Vec3,
+    add_arm_servos,
     add_ft_sensor,
     add_render_twins,
-    add_servo,
     euler_quat,
     load_erd_urdf,
     mount,
@@ -102,16 +102,7 @@ def build_xarm7(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.autolimits = True
 
-    for joint, actuator, (kp, kv, force) in zip(JOINTS, ACTUATORS, _GAINS, strict=True):
-        add_servo(
-            spec,
-            actuator,
-            joint,
-            kp=kp,
-            kv=kv,
-            ctrl_range=tuple(spec.joint(joint).range),
-            force_range=(-force, force),
-        )
+    add_arm_servos(spec, JOINTS, ACTUATORS, _GAINS)
     link7 = spec.body("link7")
     link7.add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)  # RMB's IK frame: joint 7's
     xarm_gripper.add_xarm_gripper(spec, link7, quat=_GRIPPER_MOUNT_QUAT)
