@@ -38,6 +38,16 @@ EPISODES, EPISODE_LEN = 2, 24
 FRONT = "observation.images.front"
 DEPTH = "observation.images.front_depth"
 PROCESSES, BATCH, STEPS = 2, 2, 3
+# Opt-in until a teardown hang is understood: in 1 of ~15 runs, rank 0 finished training and
+# saved, then blocked for good in ``~ProcessGroupGloo`` (joining a gloo thread) after rank 1 had
+# exited; py-spy showed it in the Reducer's dealloc as LeRobot's ``train()`` returned. That is
+# LeRobot/torch teardown, not a plugin, but a CI run must never hang: run these with
+# ``RMB_TEST_DDP=1 .venv/bin/python -m pytest tests/policies_extra/test_distributed.py``.
+pytestmark = pytest.mark.skipif(
+    os.environ.get("RMB_TEST_DDP") != "1",
+    reason="DDP tests are opt-in (RMB_TEST_DDP=1): intermittent gloo teardown hang, see module",
+)
+
 OBSERVER = Path(__file__).with_name("ddp_observer.py")
 
 
