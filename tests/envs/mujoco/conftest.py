@@ -156,3 +156,19 @@ def sweep():
 def settle():
     """``settle(model, data, seconds)``: step the simulation."""
     return run_for
+
+
+def compile_at_home(build: Callable[[], RobotModel]):
+    """Build and compile a robot, every arm at its home pose: ``(robot, model, data)``."""
+    robot = build()
+    model = robot.spec.compile()
+    data = mujoco.MjData(model)
+    for arm in robot.arms:
+        arm.set_home(model, data)
+    return robot, model, data
+
+
+@pytest.fixture
+def at_home():
+    """``at_home(build) -> (robot, model, data)``: compiled, every arm at home."""
+    return compile_at_home

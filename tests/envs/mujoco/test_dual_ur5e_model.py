@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -11,17 +10,8 @@ from rmb_lerobot.envs.mujoco.robot import UR5E_2F85, build_robot_spec
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
 
-def at_home():
-    robot = build_dual_ur5e()
-    model = robot.spec.compile()
-    data = mujoco.MjData(model)
-    for arm in robot.arms:
-        arm.set_home(model, data)
-    return robot, model, data
-
-
-def test_names_are_rmbs_with_prefixes():
-    robot, model, _ = at_home()
+def test_names_are_rmbs_with_prefixes(at_home):
+    robot, model, _ = at_home(build_dual_ur5e)
     left, right = robot.arms
     assert left.arm_joints[0] == "left/shoulder_pan_joint"
     assert right.gripper_actuator == "right/gripper/fingers_actuator"
@@ -47,8 +37,8 @@ def test_names_are_rmbs_with_prefixes():
     )
 
 
-def test_arms_stand_where_rmbs_do_and_are_the_single_ur5e():
-    robot, model, data = at_home()
+def test_arms_stand_where_rmbs_do_and_are_the_single_ur5e(at_home):
+    robot, model, data = at_home(build_dual_ur5e)
     single = build_robot_spec(UR5E_2F85).compile()
     for arm, prefix in zip(robot.arms, ("left/", "right/"), strict=True):
         np.testing.assert_allclose(data.body(arm.root_body).xpos, RMB_MOUNT_POS[prefix])
@@ -64,8 +54,8 @@ def test_arms_stand_where_rmbs_do_and_are_the_single_ur5e():
     assert model.opt.timestep == 0.004
 
 
-def test_home_tcps_are_over_the_table_each_on_its_side():
-    robot, _, data = at_home()
+def test_home_tcps_are_over_the_table_each_on_its_side(at_home):
+    robot, _, data = at_home(build_dual_ur5e)
     hx, hy = RMB_TABLE.table.half_size
     left, right = (data.site(arm.tcp_site).xpos for arm in robot.arms)
     for tcp in (left, right):
@@ -79,8 +69,8 @@ def test_each_gripper_maps_commands_like_the_single_ur5e(sweep, arm_index):
     np.testing.assert_allclose(values, [0, 63.75, 127.5, 191.25, 255, 0], atol=6)
 
 
-def test_one_gripper_closing_leaves_the_other_open(settle):
-    robot, model, data = at_home()
+def test_one_gripper_closing_leaves_the_other_open(at_home, settle):
+    robot, model, data = at_home(build_dual_ur5e)
     left, right = robot.arms
     data.actuator(left.gripper_actuator).ctrl[0] = 255
     settle(model, data, 1.0)

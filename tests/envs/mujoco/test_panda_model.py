@@ -10,16 +10,8 @@ from rmb_lerobot.envs.mujoco.models.panda import RMB_MOUNT_POS, build_panda
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
 
-def at_home():
-    robot = build_panda()
-    model = robot.spec.compile()
-    data = mujoco.MjData(model)
-    robot.arms[0].set_home(model, data)
-    return robot, model, data
-
-
-def test_names_are_rmbs():
-    robot, model, _ = at_home()
+def test_names_are_rmbs(at_home):
+    robot, model, _ = at_home(build_panda)
     arm = robot.arms[0]
     assert arm.arm_joints == tuple(f"joint{i}" for i in range(1, 8))
     assert arm.arm_actuators == tuple(f"actuator{i}" for i in range(1, 8))
@@ -34,8 +26,8 @@ def test_names_are_rmbs():
     np.testing.assert_allclose(model.actuator_gainprm[:7, 0], [1000] * 2 + [750] * 2 + [300] * 3)
 
 
-def test_home_tcp_is_over_the_table_in_front_of_the_arm():
-    robot, _, data = at_home()
+def test_home_tcp_is_over_the_table_in_front_of_the_arm(at_home):
+    robot, _, data = at_home(build_panda)
     tcp = data.site(robot.arms[0].tcp_site).xpos
     hx, hy = RMB_TABLE.table.half_size
     assert RMB_MOUNT_POS[0] < tcp[0] < hx and abs(tcp[1]) < hy
@@ -47,8 +39,8 @@ def test_gripper_command_is_the_finger_opening(sweep):
     np.testing.assert_allclose(values, [0, 0.25, 0.5, 0.75, 1, 0], atol=0.02)
 
 
-def test_arm_links_never_touch_each_other():
-    robot, model, data = at_home()
+def test_arm_links_never_touch_each_other(at_home):
+    robot, model, data = at_home(build_panda)
     rng = np.random.default_rng(0)
     arm_q = [model.joint(name).qposadr[0] for name in robot.arms[0].arm_joints]
     lo, hi = model.jnt_range[[model.joint(n).id for n in robot.arms[0].arm_joints]].T

@@ -18,16 +18,8 @@ ON_TABLE = (-0.22, 0.0, RMB_TABLE.table.top_z)
 build = functools.partial(build_xarm7, mount_pos=ON_TABLE)
 
 
-def at_home():
-    robot = build()
-    model = robot.spec.compile()
-    data = mujoco.MjData(model)
-    robot.arms[0].set_home(model, data)
-    return robot, model, data
-
-
-def test_names_are_rmbs():
-    robot, model, _ = at_home()
+def test_names_are_rmbs(at_home):
+    robot, model, _ = at_home(build)
     arm = robot.arms[0]
     assert arm.arm_joints == tuple(f"joint{i}" for i in range(1, 8))
     assert arm.arm_actuators == tuple(f"act{i}" for i in range(1, 8))
@@ -48,8 +40,8 @@ def test_names_are_rmbs():
     assert arm.gripper_ctrl_range == (0.0, 255.0) and arm.home_gripper == 0.0
 
 
-def test_home_tcp_is_over_the_table_in_front_of_the_arm():
-    robot, _, data = at_home()
+def test_home_tcp_is_over_the_table_in_front_of_the_arm(at_home):
+    robot, _, data = at_home(build)
     arm = robot.arms[0]
     tcp = data.site(arm.tcp_site).xpos
     hx, hy = RMB_TABLE.table.half_size
@@ -62,8 +54,8 @@ def test_home_tcp_is_over_the_table_in_front_of_the_arm():
     assert camera_view @ tool_z > 0.99
 
 
-def test_arm_holds_home_with_rmbs_gains(settle):
-    robot, model, data = at_home()
+def test_arm_holds_home_with_rmbs_gains(at_home, settle):
+    robot, model, data = at_home(build)
     arm = robot.arms[0]
     settle(model, data, 2.0)
     q = np.array([data.joint(name).qpos[0] for name in arm.arm_joints])
@@ -80,8 +72,8 @@ def test_gripper_command_maps_to_rmbs_measured_value(sweep):
     np.testing.assert_allclose(values[:5], [0, 63.75, 127.5, 191.25, 255], atol=5)
 
 
-def test_the_six_gripper_joints_follow_the_driver(settle):
-    robot, model, data = at_home()
+def test_the_six_gripper_joints_follow_the_driver(at_home, settle):
+    robot, model, data = at_home(build)
     arm = robot.arms[0]
     for command in (0.0, 128.0, 255.0):
         data.actuator(arm.gripper_actuator).ctrl[0] = command
