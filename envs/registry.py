@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 
 from rmb_lerobot.envs.robots import ROBOTS, Robot
-from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
+from rmb_lerobot.envs.workspace import DUAL_TABLE, RMB_TABLE, XARM_TABLE, Workspace
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.base import RmbEnv
@@ -135,9 +135,11 @@ def _entry(
     expert_class: str,
     robot: str = DEFAULT_ROBOT,
     workspace: Workspace = RMB_TABLE,
+    expert_module: str | None = None,
 ) -> EnvEntry:
     """A MuJoCo entry whose task and expert live in ``tasks/<module>.py``/``experts/<module>.py``
-    (the task name up to its first ``_``: cabinet_hinge and cabinet_slide share a module)."""
+    (the task name up to its first ``_``: cabinet_hinge and cabinet_slide share a module), or
+    the expert in ``experts/<expert_module>.py``."""
     tasks, experts = "rmb_lerobot.envs.tasks", "rmb_lerobot.envs.experts"
     module = task.split("_")[0]
     return EnvEntry(
@@ -145,7 +147,7 @@ def _entry(
         robot,
         task,
         f"{tasks}.{module}:{task_class}",
-        f"{experts}.{module}:{expert_class}",
+        f"{experts}.{expert_module or module}:{expert_class}",
         workspace,
     )
 
@@ -163,6 +165,20 @@ ENVS: dict[str, EnvEntry] = {
         _entry("pick", "PickTask", "PickExpert"),
         _entry("ring", "RingTask", "RingExpert"),
         _entry("toolbox", "ToolboxTask", "ToolboxExpert"),
+        # RMB's other MuJoCo robots: the xArm7 on its own table, the Panda on the UR5e's table,
+        # two UR5e arms on one stand.
+        _entry("cable", "CableTask", "CableExpert", robot="xarm7", workspace=XARM_TABLE),
+        _entry("ring", "RingTask", "RingExpert", robot="xarm7", workspace=XARM_TABLE),
+        _entry("pusht", "PushTTask", "PushTExpert", robot="xarm7", workspace=XARM_TABLE),
+        _entry("cable", "CableTask", "CableExpert", robot="panda"),
+        _entry(
+            "cable",
+            "CableTask",
+            "DualCableExpert",
+            robot="ur5e_dual",
+            workspace=DUAL_TABLE,
+            expert_module="dual_cable",
+        ),
     )
 }
 """Every environment by short name (:attr:`EnvEntry.name`): the source of truth for names."""

@@ -232,7 +232,132 @@ UR5E = Robot(
     ),
 )
 
-ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E,)}
+
+def _ur5e_arm(side: str, mount_y: float, home: tuple[float, ...]) -> Arm:
+    """One arm of RMB's dual UR5e: the single UR5e's arm under the ``<side>/`` name prefix,
+    mounted ``mount_y`` off the centre line, with its own hand camera ``<side>_hand``."""
+    prefix = f"{side}/"
+    arm = UR5E.arms[0]
+
+    def named(name: str) -> str:
+        return prefix + name
+
+    return Arm(
+        name=side,
+        joints=tuple(map(named, arm.joints)),
+        home=home,
+        gripper=Gripper(
+            joints=tuple(map(named, arm.gripper.joints)),
+            open=arm.gripper.open,
+            closed=arm.gripper.closed,
+            measured_scale=arm.gripper.measured_scale,
+        ),
+        mount=Pose(pos=(arm.mount.pos[0], mount_y, arm.mount.pos[2]), quat=arm.mount.quat),
+        root_frame=named(arm.root_frame),
+        eef_frame=named(arm.eef_frame),
+        tcp_frame=named(arm.tcp_frame),
+        hand_frame=named(arm.hand_frame),
+        wrench_frame=named(arm.wrench_frame) if arm.wrench_frame else None,
+        hand_camera=HandCamera(f"{side}_hand", arm.hand_camera.pose, arm.hand_camera.fovy)
+        if arm.hand_camera
+        else None,
+    )
+
+
+UR5E_DUAL = Robot(
+    name="ur5e_dual",
+    rmb_name="UR5eDual",
+    # env_ur5e_dual_cable.xml: left/ and right/ arms at y = +-0.4 on one 1.32 m stand; the
+    # start pose of MujocoUR5eDualCableEnv.py (RMB has no other dual MuJoCo env).
+    arms=(
+        _ur5e_arm(
+            "left",
+            0.4,
+            tuple(float(q) for q in np.pi * np.array([0.9, -0.4, -0.65, -0.2, 0.5, 0.5])),
+        ),
+        _ur5e_arm(
+            "right",
+            -0.4,
+            tuple(float(q) for q in np.pi * np.array([0.1, -0.6, 0.65, -0.8, -0.5, -0.5])),
+        ),
+    ),
+    rmb_envs=frozenset({"RealUR5eDualDemoEnv"}),
+)
+
+XARM7 = Robot(
+    name="xarm7",
+    rmb_name="Xarm7",
+    arms=(
+        Arm(
+            name="arm",
+            joints=tuple(f"joint{i}" for i in range(1, 8)),
+            # MujocoXarm7CableEnv.py line 20 (also PushT's start pose).
+            home=(0.0, 0.0, 0.0, 0.8, 0.0, 0.8, 0.0),
+            gripper=Gripper(
+                # MujocoXarm7EnvBase._get_obs: measured = mean of these six angles / 0.8 * 255.
+                joints=(
+                    "left_driver_joint",
+                    "left_finger_joint",
+                    "left_inner_knuckle_joint",
+                    "right_driver_joint",
+                    "right_finger_joint",
+                    "right_inner_knuckle_joint",
+                ),
+                open=0.0,
+                closed=255.0,
+                measured_scale=255.0 / 0.8,
+            ),
+            # env_xarm7_*.xml: xarm7_root_frame on RMB's xArm table, 0.22 m behind its centre.
+            mount=Pose(pos=(-0.22, 0.0, 0.74)),
+            root_frame="xarm7_root_frame",
+            eef_frame="eef",  # on link7 at joint 7 (RMB's IK frame, ik_eef_joint_id 7)
+            tcp_frame="link_tcp",
+            hand_frame="link7",  # the gripper and the camera are mounted on link 7
+            wrench_frame="ft_site",
+            # xarm7_body.xml lines 104-108: the wrist D435 on link7, fovy 62 deg; the quaternion
+            # of RMB's euler="0 3.1415 1.5708" (3.1415, not pi).
+            hand_camera=HandCamera(
+                "hand",
+                Pose(
+                    pos=(0.06746, 0.0, 0.0237),
+                    quat=(3.2757930e-05, 0.70710808, 0.70710548, 3.2758051e-05),
+                ),
+                62.0,
+            ),
+        ),
+    ),
+    rmb_envs=frozenset({"RealXarm7DemoEnv"}),
+)
+
+PANDA = Robot(
+    name="panda",
+    rmb_name="Panda",
+    arms=(
+        Arm(
+            name="arm",
+            joints=tuple(f"joint{i}" for i in range(1, 8)),
+            # MujocoPandaCableEnv.py lines 20-30.
+            home=tuple(float(q) for q in np.deg2rad([0, 25, 0, -58, 0, 82, -40])),
+            gripper=Gripper(
+                # RMB's command is the finger opening, 0 (closed) .. 1 (0.04 m each finger);
+                # measured = mean(fingers) / 0.04 (MujocoPandaEnvBase.py line 106).
+                joints=("finger_joint1", "finger_joint2"),
+                open=1.0,
+                closed=0.0,
+                measured_scale=1.0 / 0.04,
+            ),
+            # env_panda_cable.xml line 36: panda_root_frame on RMB's stand.
+            mount=Pose(pos=(-0.5, 0.0, 0.8)),
+            root_frame="panda_root_frame",
+            eef_frame="eef",  # on panda_link7 (the flange)
+            tcp_frame="pinch",  # between the fingertip pads (franka_ros panda_hand_tcp)
+            hand_frame="panda_hand",
+            wrench_frame="ft_site",
+        ),
+    ),
+)
+
+ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E, UR5E_DUAL, XARM7, PANDA)}
 """Every robot by short name."""
 
 

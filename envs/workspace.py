@@ -80,4 +80,32 @@ RMB_TABLE = Workspace(
 )
 """The table scene of RMB's MuJoCo UR5e tasks."""
 
-WORKSPACES: dict[str, Workspace] = {ws.name: ws for ws in (RMB_TABLE,)}
+# RMB's cameras of its other MuJoCo scenes, given as MJCF euler angles there; here as the point
+# on the camera's axis at the table-top height (same pose: no roll in any of them).
+XARM_TABLE = Workspace(
+    name="xarm_table",
+    # env_xarm7_*.xml lines 29-34: a 0.6 x 0.9 m table top at z = 0.74 m (0.721 + 0.019).
+    table=Table(top_centre=(0.0, 0.0, 0.74), half_size=(0.3, 0.45)),
+    cameras=(
+        SceneCamera("front", pos=(0.65, 0.0, 1.5), lookat=(-0.11, 0.0, 0.74)),  # 45 deg down
+        SceneCamera("left", pos=(0.0, -0.75, 1.35), lookat=(0.0, -0.14, 0.74)),  # 45 deg, +y
+        SceneCamera("right", pos=(0.0, 0.75, 1.35), lookat=(0.0, 0.14, 0.74)),  # 45 deg, -y
+    ),
+)
+"""The table scene of RMB's MuJoCo xArm7 tasks (the arm stands on the table)."""
+
+DUAL_TABLE = Workspace(
+    name="dual_table",
+    table=RMB_TABLE.table,
+    # env_ur5e_dual_cable.xml lines 17-20: front as the single UR5e's, left/right 45 deg down
+    # from the sides, and ``rear`` behind the robots looking over them (22 deg down, +x).
+    cameras=(
+        RMB_TABLE.cameras[0],
+        SceneCamera("left", pos=(0.0, -0.75, 1.35), lookat=(0.0, -0.215, 0.815)),
+        SceneCamera("right", pos=(0.0, 0.75, 1.35), lookat=(0.0, 0.215, 0.815)),
+        SceneCamera("rear", pos=(-0.9, 0.0, 1.35), lookat=(0.42, 0.0, 0.815)),
+    ),
+)
+"""RMB's UR5e table seen by a dual-arm robot: the front/left/right views and a rear one."""
+
+WORKSPACES: dict[str, Workspace] = {ws.name: ws for ws in (RMB_TABLE, XARM_TABLE, DUAL_TABLE)}

@@ -9,6 +9,7 @@ the two can never drift apart silently.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,8 @@ from rmb_lerobot.envs.mujoco.robot import (
     build_robot_spec,
 )
 from rmb_lerobot.envs.robots import Robot
+
+MESH_OPTIONS = ("visual_mesh_error", "mesh_cache")
 
 # RMB's stand under the single UR5e: 0.66 m square, up to the arm's mount height (0.8 m).
 UR5E_STAND = StandBox(
@@ -61,9 +64,29 @@ def build_ur5e(
     )
 
 
-MUJOCO_BUILDERS: dict[str, Callable[..., RobotModel]] = {"ur5e": build_ur5e}
+def _builder(module: str, function: str, mesh_options: bool = True) -> Callable[..., RobotModel]:
+    """A builder that imports its model module when first called (the xArm7 and Panda need
+    example-robot-data); ``mesh_options=False``: the model has no mesh options (the Panda's
+    coarse collision meshes are drawn as they are)."""
+
+    def build(**options: Any) -> RobotModel:
+        if not mesh_options:
+            options = {k: v for k, v in options.items() if k not in MESH_OPTIONS}
+        models = importlib.import_module(f"rmb_lerobot.envs.mujoco.models.{module}")
+        return getattr(models, function)(**options)
+
+    return build
+
+
+MUJOCO_BUILDERS: dict[str, Callable[..., RobotModel]] = {
+    "ur5e": build_ur5e,
+    "ur5e_dual": _builder("dual_ur5e", "build_dual_ur5e"),
+    "xarm7": _builder("xarm7", "build_xarm7"),
+    "panda": _builder("panda", "build_panda", mesh_options=False),
+}
 """Robot short name -> its MuJoCo model builder (keyword options: ``visual_mesh_error``,
-``mesh_cache``)."""
+``mesh_cache``). Every builder reads the robot's facts (joints, gripper, home, mount, frames,
+cameras) from its record; :func:`check_model` proves it."""
 
 
 def _arm_facts(arm: ArmModel) -> dict[str, Any]:

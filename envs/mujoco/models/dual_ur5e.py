@@ -29,7 +29,6 @@ import dataclasses
 from pathlib import Path
 
 import mujoco
-import numpy as np
 
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.models.common import ArmModel, RobotModel, StandBox, Vec3
@@ -39,14 +38,14 @@ from rmb_lerobot.envs.mujoco.robot import (
     UR5E_2F85,
     build_robot_spec,
 )
+from rmb_lerobot.envs.robots import UR5E_DUAL
 
-PREFIXES = ("left/", "right/")
-RMB_MOUNT_POS: dict[str, Vec3] = {"left/": (-0.605, 0.4, 0.8), "right/": (-0.605, -0.4, 0.8)}
+# The record's arms, by name prefix: mounts (y = +-0.4 on one stand) and start poses.
+_ARMS = {f"{arm.name}/": arm for arm in UR5E_DUAL.arms}
+PREFIXES = tuple(_ARMS)
+RMB_MOUNT_POS: dict[str, Vec3] = {prefix: arm.mount.pos for prefix, arm in _ARMS.items()}
 RMB_STAND = StandBox(pos=(-0.605, 0.0, 0.4), half_size=(0.33, 0.66, 0.4))
-HOMES = {
-    "left/": tuple(float(q) for q in np.array([0.9, -0.4, -0.65, -0.2, 0.5, 0.5]) * np.pi),
-    "right/": tuple(float(q) for q in np.array([0.1, -0.6, 0.65, -0.8, -0.5, -0.5]) * np.pi),
-}
+HOMES = {prefix: arm.home for prefix, arm in _ARMS.items()}
 
 
 def _arm_names(prefix: str) -> ArmModel:
@@ -61,7 +60,7 @@ def _arm_names(prefix: str) -> ArmModel:
         gripper_actuator=prefix + robot.gripper_actuator,
         gripper_joints=p(robot.gripper_joints),
         gripper_scale=robot.gripper_scale,
-        gripper_ctrl_range=(0.0, 255.0),
+        gripper_ctrl_range=_ARMS[prefix].gripper.command_range,
         home_arm_qpos=HOMES[prefix],
         home_gripper=0.0,
         root_body=prefix + robot.root_body,

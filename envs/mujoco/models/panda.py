@@ -43,7 +43,6 @@ random configurations).
 from __future__ import annotations
 
 import mujoco
-import numpy as np
 
 from rmb_lerobot.envs.mujoco.models.common import (
     ArmModel,
@@ -56,22 +55,23 @@ from rmb_lerobot.envs.mujoco.models.common import (
     load_erd_urdf,
     mount,
 )
+from rmb_lerobot.envs.robots import PANDA
 
 URDF = "panda_description/urdf/panda.urdf"
-ROOT_BODY = "panda_root_frame"
+_ARM = PANDA.arms[0]  # the record: joints, gripper, home, mount, frames
+ROOT_BODY = _ARM.root_frame
 BASE_BODY = "panda_link0"
-HAND_BODY = "panda_hand"
-EEF_SITE = "eef"
-TCP_SITE = "pinch"
-FT_SITE = "ft_site"
-JOINTS = tuple(f"joint{i}" for i in range(1, 8))
+HAND_BODY = _ARM.hand_frame
+EEF_SITE = _ARM.eef_frame
+TCP_SITE = _ARM.tcp_frame
+FT_SITE = _ARM.wrench_frame
+JOINTS = _ARM.joints
 ACTUATORS = tuple(f"actuator{i}" for i in range(1, 8))
 GRIPPER_ACTUATOR = "actuator8"
-GRIPPER_JOINTS = ("finger_joint1", "finger_joint2")
+GRIPPER_JOINTS = _ARM.gripper.joints
 GRIPPER_CTRL_RANGE = (0.0, 1.0)
-FINGER_TRAVEL = 0.04  # m, each finger (URDF and RMB joint range)
-HOME = tuple(float(q) for q in np.deg2rad([0, 25, 0, -58, 0, 82, -40]))
-RMB_MOUNT_POS: Vec3 = (-0.5, 0.0, 0.8)
+HOME = _ARM.home
+RMB_MOUNT_POS: Vec3 = _ARM.mount.pos
 RMB_STAND = StandBox(pos=(-0.5, 0.0, 0.4), half_size=(0.22, 0.22, 0.4))
 # panda_config.xml lines 126-138: (kp, kv, |force|), force as explained in the module docstring.
 _GAINS = ((1000, 20, 100),) * 2 + ((750, 4, 100),) * 2 + ((300, 2, 12),) * 3
@@ -156,10 +156,10 @@ def build_panda(*, mount_pos: Vec3 = RMB_MOUNT_POS) -> RobotModel:
         arm_actuators=ACTUATORS,
         gripper_actuator=GRIPPER_ACTUATOR,
         gripper_joints=GRIPPER_JOINTS,
-        gripper_scale=1.0 / FINGER_TRAVEL,
+        gripper_scale=_ARM.gripper.measured_scale,
         gripper_ctrl_range=GRIPPER_CTRL_RANGE,
         home_arm_qpos=HOME,
-        home_gripper=1.0,
+        home_gripper=_ARM.gripper.home_command,
         root_body=ROOT_BODY,
         base_body=BASE_BODY,
         eef_site=EEF_SITE,

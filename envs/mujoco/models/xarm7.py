@@ -39,17 +39,18 @@ from rmb_lerobot.envs.mujoco.models.common import (
     load_erd_urdf,
     mount,
 )
-from rmb_lerobot.envs.mujoco.robot import HAND_CAMERA
+from rmb_lerobot.envs.robots import XARM7
 
 URDF = "xarm_description/urdf/xarm7.urdf"
-ROOT_BODY = "xarm7_root_frame"
+_ARM = XARM7.arms[0]  # the record: joints, home, mount, frames, camera
+ROOT_BODY = _ARM.root_frame
 BASE_BODY = "link_base"
-EEF_SITE = "eef"
-FT_SITE = "ft_site"
-JOINTS = tuple(f"joint{i}" for i in range(1, 8))
+EEF_SITE = _ARM.eef_frame
+FT_SITE = _ARM.wrench_frame
+JOINTS = _ARM.joints
 ACTUATORS = tuple(f"act{i}" for i in range(1, 8))
-HOME = (0.0, 0.0, 0.0, 0.8, 0.0, 0.8, 0.0)
-RMB_MOUNT_POS: Vec3 = (-0.22, 0.0, 0.74)
+HOME = _ARM.home
+RMB_MOUNT_POS: Vec3 = _ARM.mount.pos
 RMB_TABLE_TOP_Z = 0.74
 # xarm7_config.xml lines 36-46: (kp, kv, |force|) of classes size1 (joints 1-2), size2 (3-5),
 # size3 (6-7); ctrlrange = the joint range (lines 35, 93-97).
@@ -70,11 +71,9 @@ def _add_hand_camera(spec: mujoco.MjSpec) -> None:
     body.add_geom(type=box, size=[0.0125, 0.0455, 0.0115], pos=[0.0675, 0, 0.0115], **visual)
     body.add_geom(type=box, size=[0.051, 0.0375, 0.0015], pos=[0.013, 0, 0.0015], **visual)
     body.add_geom(type=box, size=[0.0125, 0.0455, 0.014], pos=[0.0675, 0, 0.014], group=3)
+    camera = _ARM.hand_camera
     body.add_camera(
-        name=HAND_CAMERA,
-        pos=[0.06746, 0.0, 0.0237],
-        quat=euler_quat((0.0, 3.1415, 1.5708)),  # RMB's numbers (3.1415, not pi)
-        fovy=62.0,
+        name=camera.name, pos=list(camera.pose.pos), quat=list(camera.pose.quat), fovy=camera.fovy
     )
 
 
@@ -128,6 +127,7 @@ def build_xarm7(
         ft_site=FT_SITE,
         force_sensor=force,
         torque_sensor=torque,
-        hand_camera=HAND_CAMERA,
+        hand_camera=_ARM.hand_camera.name,
     )
-    return RobotModel("xarm7", spec, (arm,), {HAND_CAMERA: HAND_CAMERA}, stand=None)
+    camera = _ARM.hand_camera.name
+    return RobotModel("xarm7", spec, (arm,), {camera: camera}, stand=None)
