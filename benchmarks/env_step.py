@@ -20,9 +20,9 @@ import argparse
 import time
 
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.catalog import TASKS
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.render import mujoco
+from rmb_lerobot.envs.registry import ENVS
 
 CAMERA_SETS = {0: (), 1: ("front",), 4: ("front", "left", "right", "hand")}
 SIZES = ((128, 128), (640, 480))
@@ -61,7 +61,7 @@ def env_steps_per_second(env: RmbEnv, steps: int, repeats: int = 1) -> tuple[flo
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--task", default="insert", choices=sorted(TASKS))
+    parser.add_argument("--task", default="insert", choices=sorted(ENVS))
     parser.add_argument("--steps", type=int, default=20, help="env steps per configuration")
     parser.add_argument(
         "--visual-mesh-error",
@@ -78,9 +78,9 @@ def main() -> None:
     args = parser.parse_args()
     options = {"visual_mesh_error": args.visual_mesh_error, "antialias": not args.no_antialias}
 
-    task = TASKS[args.task]()
+    entry = ENVS[args.task]
     start = time.perf_counter()
-    base_env = RmbEnv(task, cameras=(), **options)
+    base_env = entry.make(cameras=(), **options)
     construct_first = time.perf_counter() - start
     physics = physics_steps_per_second(base_env)
     limit = physics / base_env.sim.frame_skip
@@ -93,8 +93,7 @@ def main() -> None:
         for n_cams in (1, 4):
             for depth in (False, True):
                 start = time.perf_counter()
-                env = RmbEnv(
-                    task,
+                env = entry.make(
                     cameras=CAMERA_SETS[n_cams],
                     image_size=(width, height),
                     depth=depth,

@@ -16,15 +16,16 @@ from __future__ import annotations
 import argparse
 import time
 
-from rmb_lerobot.envs.base import ACTION_MODES, RmbEnv
-from rmb_lerobot.envs.catalog import EXPERTS, TASKS
+from rmb_lerobot.envs.base import ACTION_MODES
+from rmb_lerobot.envs.registry import ENVS
 
 
 def success_rate(
     task: str, episodes: int, random_shift: float, action_mode: str, cycle: bool = False
 ) -> dict:
-    env = RmbEnv(TASKS[task](), cameras=(), action_mode=action_mode)
-    expert = EXPERTS[task](env)
+    entry = ENVS[task]
+    env = entry.make(cameras=(), action_mode=action_mode)
+    expert = entry.load_expert_class()(env)
     variants = env.task.episode_variants() if cycle else ()
     successes, steps, failed = 0, 0, []
     per_variant: dict[str, list[bool]] = {}
@@ -59,7 +60,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--random-shift", type=float, default=0.03, help="metres")
-    parser.add_argument("--tasks", nargs="+", default=sorted(TASKS), choices=sorted(TASKS))
+    parser.add_argument("--tasks", nargs="+", default=sorted(ENVS), choices=sorted(ENVS))
     parser.add_argument("--action-mode", default="joint", choices=ACTION_MODES)
     parser.add_argument(
         "--cycle-instructions",
