@@ -78,7 +78,11 @@ def test_layout_for_env_knows_the_ur5e_envs_by_exact_name():
     assert K.layout_for_env("MujocoUR5eCableEnv") == K.UR5E_LAYOUT  # the original's and ours
     assert K.layout_for_env("RealUR5eDemoEnv") == K.UR5E_LAYOUT
     assert K.layout_for_env("MujocoUR5eCabinetHingeEnv") == K.UR5E_LAYOUT  # from our registry
-    assert K.layout_for_env("MujocoUR5eDualCableEnv") is None  # two arms, not a UR5e
+    # Two arms, not a UR5e: 14 joints, two grippers, two eefs.
+    assert K.layout_for_env("MujocoUR5eDualCableEnv") == K.RobotLayout(14, 2, 2)
+    assert K.layout_for_env("RealUR5eDualDemoEnv") == K.RobotLayout(14, 2, 2)
+    assert K.layout_for_env("MujocoXarm7CableEnv") == K.RobotLayout(num_joints=8)
+    assert K.layout_for_env("MujocoPandaCableEnv") == K.RobotLayout(num_joints=8)
     assert K.layout_for_env("MujocoUR5eCable") is None  # RMB writes the class name with "Env"
-    assert K.layout_for_env("MujocoXarm7CableEnv") is None  # not in the catalogue yet
+    assert K.layout_for_env("MujocoXarm7DualCableEnv") is None  # no such robot record yet
     assert K.layout_for_env(None) is None and K.layout_for_env(b"MujocoUR5eCableEnv") is None

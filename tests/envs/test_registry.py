@@ -1,16 +1,13 @@
 """The env table: every name (RMB, gymnasium, LeRobot) derives from one entry."""
 
-import dataclasses
-
 import pytest
 
 import rmb_lerobot  # noqa: F401 - registers the gymnasium ids
 from rmb_lerobot import keys as K
 from rmb_lerobot.converters.plan import robot_type_of
-from rmb_lerobot.envs import registry
 from rmb_lerobot.envs.experts.base import ScriptedExpert
 from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, robot_for_env_attr
-from rmb_lerobot.envs.robots import UR5E
+from rmb_lerobot.envs.robots import UR5E, robot_for
 
 
 def test_names_follow_rmb_and_the_issue():
@@ -23,17 +20,19 @@ def test_names_follow_rmb_and_the_issue():
     assert insert.cameras == ("front", "left", "right", "hand")
 
 
-def test_every_name_derives_from_the_robot_record_and_the_task():
-    """Another robot's entry: names from its record, short name prefixed by the robot."""
-    xarm7 = dataclasses.replace(UR5E, name="xarm7", rmb_name="Xarm7")
-    entry = EnvEntry("mujoco", "ur5e", "cable", "m:Task", "m:Expert")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setitem(registry.ROBOTS, "xarm7", xarm7)
-        entry = dataclasses.replace(entry, robot="xarm7")
-        assert entry.name == "xarm7_cable"
-        assert entry.rmb_env_name == "MujocoXarm7Cable"
-        assert entry.gym_id == "rmb_lerobot/MujocoXarm7Cable-v0"
-        assert entry.lerobot_type == "rmb_xarm7_cable" and entry.robot_type == "xarm7"
+def test_other_robots_names_derive_from_their_records():
+    """Another robot's entry: every name from its record, short name prefixed by the robot."""
+    xarm7 = ENVS["xarm7_cable"]
+    assert xarm7.rmb_env_name == "MujocoXarm7Cable" and xarm7.env_attr == "MujocoXarm7CableEnv"
+    assert xarm7.gym_id == "rmb_lerobot/MujocoXarm7Cable-v0"
+    assert xarm7.lerobot_type == "rmb_xarm7_cable" and xarm7.robot_type == "xarm7"
+    assert ENVS["xarm7_pusht"].env_attr == "MujocoXarm7PushtEnv"  # RMB's spelling of PushT
+    assert ENVS["panda_cable"].lerobot_type == "rmb_panda_cable"
+    assert ENVS["panda_cable"].cameras == ("front", "left", "right")  # RMB's Panda: no hand camera
+    dual = ENVS["ur5e_dual_cable"]
+    assert dual.env_attr == "MujocoUR5eDualCableEnv" and dual.robot_type == "ur5e_dual"
+    assert dual.lerobot_type == "rmb_ur5e_dual_cable"
+    assert dual.cameras == ("front", "left", "right", "rear", "left_hand", "right_hand")
     with pytest.raises(ValueError, match="unknown robot 'kuka'"):
         EnvEntry("mujoco", "kuka", "cable", "m:Task", "m:Expert")
     with pytest.raises(ValueError, match="unknown simulator 'gazebo'"):
@@ -42,14 +41,17 @@ def test_every_name_derives_from_the_robot_record_and_the_task():
 
 def test_env_attributes_map_to_robots_exactly_never_by_substring():
     for entry in ENVS.values():
-        assert robot_for_env_attr(entry.env_attr) is UR5E
-        assert K.layout_for_env(entry.env_attr) == UR5E.layout == K.UR5E_LAYOUT
-        assert robot_type_of(entry.env_attr) == "ur5e"
-    # The original RMB's UR5e envs that the registry does not derive.
+        robot = robot_for(entry.robot)
+        assert robot_for_env_attr(entry.env_attr) is robot
+        assert K.layout_for_env(entry.env_attr) == robot.layout
+        assert robot_type_of(entry.env_attr) == entry.robot_type == robot.name
+    # The original RMB's envs that the registry does not derive.
     for env in ("MujocoUR5eCabinetEnv", "RealUR5eDemoEnv", "IsaacUR5eChainEnv"):
         assert robot_for_env_attr(env) is UR5E and robot_type_of(env) == "ur5e"
-    # Lookalikes are not UR5e envs: a dual-arm robot, a name without "Env", other cases.
-    for env in ("MujocoUR5eDualCableEnv", "MujocoUR5eCable", "mujocour5ecableenv", "UR5e"):
+    assert robot_type_of("RealUR5eDualDemoEnv") == "ur5e_dual"
+    assert robot_type_of("RealXarm7DemoEnv") == "xarm7"
+    # Lookalikes match nothing: a name without "Env", other cases, a robot without a record.
+    for env in ("MujocoUR5eCable", "mujocour5ecableenv", "UR5e", "MujocoXarm7DualCableEnv"):
         assert robot_for_env_attr(env) is None and K.layout_for_env(env) is None
         assert robot_type_of(env) == env  # unknown: the attribute itself
     assert robot_for_env_attr(None) is None and robot_for_env_attr(["MujocoUR5eCableEnv"]) is None

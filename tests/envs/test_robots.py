@@ -29,7 +29,7 @@ PANDA_HAND = Gripper(joints=("finger1", "finger2"), open=1.0, closed=0.0, measur
 
 
 def test_the_ur5e_record_is_rmbs_ur5e():
-    assert robot_for("ur5e") is UR5E and ROBOTS == {"ur5e": UR5E}
+    assert robot_for("ur5e") is UR5E and ROBOTS["ur5e"] is UR5E
     assert UR5E.layout == K.UR5E_LAYOUT  # 6 joints + 1 gripper value, one eef
     assert UR5E.cameras == ("hand",)
     (arm,) = UR5E.arms
@@ -39,26 +39,38 @@ def test_the_ur5e_record_is_rmbs_ur5e():
     assert home[:6] == pytest.approx(np.array([1.0, -0.5, -0.55, -0.45, 0.5, 0.5]) * np.pi)
 
 
-def test_other_rmb_robots_fit_the_record():
+def test_rmbs_other_mujoco_robots_are_records_with_rmbs_conventions():
     """xArm7 (7 joints + 0..255 gripper), Panda (7 + a 0..1 gripper that opens at 1) and the
-    dual UR5e (two arms, left_hand/right_hand cameras) need no change to the record."""
-    xarm7 = Robot("xarm7", "Xarm7", (_arm("arm", 7, ROBOTIQ, "hand"),))
-    panda = Robot("panda", "Panda", (_arm("arm", 7, PANDA_HAND),))
-    dual = Robot(
-        "ur5e_dual",
-        "UR5eDual",
-        (_arm("left", 6, ROBOTIQ, "left_hand"), _arm("right", 6, ROBOTIQ, "right_hand")),
-    )
-    assert xarm7.layout == K.RobotLayout(num_joints=8)
-    assert panda.layout == K.RobotLayout(num_joints=8)
+    dual UR5e (two arms, left_hand/right_hand cameras): RMB's layouts and start poses."""
+    xarm7, panda, dual = robot_for("xarm7"), robot_for("panda"), robot_for("ur5e_dual")
+    assert xarm7.layout == K.RobotLayout(num_joints=8) and xarm7.cameras == ("hand",)
+    assert xarm7.home_command().tolist() == [0.0, 0.0, 0.0, 0.8, 0.0, 0.8, 0.0, 0.0]
+    assert xarm7.arms[0].gripper.command_range == (0.0, 255.0)
+    assert panda.layout == K.RobotLayout(num_joints=8) and panda.cameras == ()
     assert panda.arms[0].gripper.command_range == (0.0, 1.0)
     assert panda.home_command()[-1] == 1.0  # starts open
     assert dual.layout == K.RobotLayout(num_joints=14, num_grippers=2, num_eefs=2)
     assert dual.cameras == ("left_hand", "right_hand")
+    assert [arm.mount.pos[1] for arm in dual.arms] == [0.4, -0.4]  # left arm on +y
     # RMB's joint vector: per arm its joints, then its gripper value.
     assert dual.joint_slices() == ((slice(0, 6), 6), (slice(7, 13), 13))
     home = dual.home_command(((0.1,) * 6, (0.2,) * 6))
     assert home.tolist() == [0.1] * 6 + [0.0] + [0.2] * 6 + [0.0]
+    # Each dual arm is the single UR5e's arm under its prefix.
+    for arm in dual.arms:
+        assert arm.joints == tuple(f"{arm.name}/{j}" for j in UR5E.arms[0].joints)
+        assert arm.gripper.measured_scale == UR5E.arms[0].gripper.measured_scale
+
+
+def test_a_new_robot_is_one_record():
+    """What adding a robot takes: a record (here a made-up one) gives the layout, joint
+    vector and cameras without touching anything else."""
+    robot = Robot(
+        "twin_xarm", "TwinXarm", (_arm("a", 7, ROBOTIQ, "a_hand"), _arm("b", 7, PANDA_HAND))
+    )
+    assert robot.layout == K.RobotLayout(num_joints=16, num_grippers=2, num_eefs=2)
+    assert robot.cameras == ("a_hand",)
+    assert robot.home_command().tolist() == [0.0] * 7 + [0.0] + [0.0] * 7 + [1.0]
 
 
 def test_inconsistent_records_are_refused_with_the_reason():
@@ -72,5 +84,5 @@ def test_inconsistent_records_are_refused_with_the_reason():
         Gripper(joints=("f",), open=1.0, closed=1.0, measured_scale=1.0)
     with pytest.raises(ValueError, match=r"home pose \(0.0,\) has 1 values, expected 6"):
         UR5E.home_command(((0.0,),))
-    with pytest.raises(ValueError, match="unknown robot 'kuka'; known: ur5e"):
+    with pytest.raises(ValueError, match="unknown robot 'kuka'; known: panda, ur5e, ur5e_dual"):
         robot_for("kuka")
