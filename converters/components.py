@@ -53,6 +53,20 @@ def _grippers(count: int) -> list[str]:
     return ["gripper"] if count == 1 else [f"gripper_{i}" for i in range(count)]
 
 
+def _joint_names(layout: K.RobotLayout) -> list[str]:
+    """``joint_0 .. joint_5, gripper`` for one arm; per arm ``joint_<k>_<arm>, gripper_<arm>``
+    in RMB's order (each arm's joints, then its gripper) for several."""
+    groups = layout.arm_groups()
+    if len(groups) == 1:
+        joints, grippers = groups[0]
+        return [f"joint_{k}" for k in range(len(joints))] + _grippers(len(grippers))
+    return [
+        name
+        for arm, (joints, _) in enumerate(groups)
+        for name in (*(f"joint_{k}_{arm}" for k in range(len(joints))), f"gripper_{arm}")
+    ]
+
+
 def component_names(key: str, dim: int, layout: K.RobotLayout, *, policy: bool) -> list[str]:
     """Names of the ``dim`` numbers ``key`` holds per step.
 
@@ -65,8 +79,7 @@ def component_names(key: str, dim: int, layout: K.RobotLayout, *, policy: bool) 
         if spec.quantity is None:
             names = [key]
         elif spec.quantity in _JOINT_QUANTITIES:
-            arm = layout.num_joints - layout.num_grippers
-            names = [f"joint_{i}" for i in range(arm)] + _grippers(layout.num_grippers)
+            names = _joint_names(layout)
         elif spec.quantity is K.Quantity.GRIPPER_JOINT_POS:
             names = _grippers(layout.num_grippers)
         elif spec.quantity is K.Quantity.EEF_POSE:

@@ -10,6 +10,7 @@ named after the quantity. Depth videos are not listed: GR00T's video modality is
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,13 @@ TASK_ANNOTATION = "human.task_description"
 _TASK_INDEX = "task_index"  # LeRobot's per-frame task column
 
 
-def _groups(schema: DatasetSchema, keys: tuple[str, ...], source: str, is_action: bool) -> dict:
+def _groups(
+    schema: DatasetSchema,
+    keys: tuple[str, ...],
+    source: str,
+    is_action: bool,
+    arm_names: Sequence[str] | None,
+) -> dict:
     groups: dict[str, dict[str, Any]] = {}
     start = 0
 
@@ -36,36 +43,54 @@ def _groups(schema: DatasetSchema, keys: tuple[str, ...], source: str, is_action
         groups[unique] = group
         start += size
 
-    grippers = schema.layout.num_grippers
+    arms = schema.layout.arm_groups()
     for key in keys:
         dim = schema.dims[key]
         spec = K.KEYS.get(key)
         quantity = spec.quantity.value if spec is not None and spec.quantity else key
-        if spec is not None and spec.quantity is K.Quantity.JOINT_POS and 0 < grippers < dim:
-            add("arm", dim - grippers, key)
-            add("gripper", grippers, key)
+        is_joints = spec is not None and spec.quantity is K.Quantity.JOINT_POS
+        if is_joints and dim == schema.layout.num_joints and 0 < schema.layout.num_grippers < dim:
+            for i, (joints, grippers) in enumerate(arms):
+                add(_group_name("arm", i, len(arms), arm_names), len(joints), key)
+                add(_group_name("gripper", i, len(arms), arm_names), len(grippers), key)
         elif uses_policy_view(key):
-            for eef in range(dim // 7):
-                suffix = "" if dim == 7 else f"_{eef}"
-                add(f"{quantity}_position{suffix}", 3, key)
-                add(f"{quantity}_rotation{suffix}", 6, key, rotation_type="rotation_6d")
+            for i in range(dim // 7):
+                for part, size, extra in (
+                    ("position", 3, {}),
+                    ("rotation", 6, {"rotation_type": "rotation_6d"}),
+                ):
+                    name = _group_name(f"{quantity}_{part}", i, dim // 7, arm_names)
+                    add(name, size, key, **extra)
         else:
             add(quantity, dim, key)
     return groups
 
 
-def modality(schema: DatasetSchema) -> dict[str, Any]:
-    """The content of ``meta/modality.json`` for a dataset with ``schema``."""
+def _group_name(base: str, arm: int, count: int, arm_names: Sequence[str] | None) -> str:
+    """``base`` for one arm; of several, prefixed by the robot's arm name (``left_arm``,
+    ``right_gripper``: GR00T's bimanual convention) or, without names, ``<base>_<arm>``."""
+    if count == 1:
+        return base
+    if arm_names is not None and len(arm_names) == count:
+        return f"{arm_names[arm]}_{base}"
+    return f"{base}_{arm}"
+
+
+def modality(schema: DatasetSchema, arm_names: Sequence[str] | None = None) -> dict[str, Any]:
+    """The content of ``meta/modality.json`` for a dataset with ``schema``; ``arm_names``
+    (the robot record's, in joint-vector order) name a multi-arm robot's groups."""
     return {
-        "state": _groups(schema, schema.state_keys, N.STATE, is_action=False),
-        "action": _groups(schema, schema.action_keys, N.ACTION_KEY, is_action=True),
+        "state": _groups(schema, schema.state_keys, N.STATE, False, arm_names),
+        "action": _groups(schema, schema.action_keys, N.ACTION_KEY, True, arm_names),
         "video": {camera: {"original_key": N.image_key(camera)} for camera in schema.cameras},
         "annotation": {TASK_ANNOTATION: {"original_key": _TASK_INDEX}},
     }
 
 
-def write_modality(root: Path, schema: DatasetSchema) -> Path:
+def write_modality(
+    root: Path, schema: DatasetSchema, arm_names: Sequence[str] | None = None
+) -> Path:
     path = Path(root) / N.GR00T_MODALITY_PATH
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(modality(schema), indent=2) + "\n")
+    path.write_text(json.dumps(modality(schema, arm_names), indent=2) + "\n")
     return path

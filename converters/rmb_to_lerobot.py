@@ -24,6 +24,7 @@ from rmb_lerobot.converters.progress import Bars
 from rmb_lerobot.converters.shards import write_sharded
 from rmb_lerobot.converters.stats import refresh_finite_stats
 from rmb_lerobot.converters.write import VideoSettings, finish_metadata, write_dataset
+from rmb_lerobot.envs.robots import ROBOTS
 from rmb_lerobot.episode import find_episodes
 
 logger = logging.getLogger(__name__)
@@ -86,5 +87,6 @@ def to_lerobot(
         if plan.allow_non_finite:
             refresh_finite_stats(tmp)
         write_rmb_metadata(tmp, plan)
-        write_modality(tmp, plan.schema)
+        robot = ROBOTS.get(plan.robot_type)
+        write_modality(tmp, plan.schema, [arm.name for arm in robot.arms] if robot else None)
     return repo_id, root

@@ -79,6 +79,22 @@ class RobotLayout:
     num_grippers: int = 1
     num_eefs: int = 1
 
+    def arm_groups(self) -> tuple[tuple[range, range], ...]:
+        """Per arm, the indices of its arm joints and of its gripper value(s) in a joint vector.
+
+        RMB orders a multi-arm joint vector arm by arm, each arm's joints then its gripper
+        (the dual UR5e: 6 + 1 left, 6 + 1 right). One gripper per arm; a vector that does not
+        split evenly into ``num_grippers`` arms is read as one arm: joints, then grippers.
+        """
+        n, g = self.num_joints, self.num_grippers
+        if g <= 1 or n % g:
+            return ((range(0, n - g), range(n - g, n)),)
+        per_arm = n // g
+        return tuple(
+            (range(start, start + per_arm - 1), range(start + per_arm - 1, start + per_arm))
+            for start in range(0, n, per_arm)
+        )
+
 
 UR5E_LAYOUT = RobotLayout(num_joints=7)
 

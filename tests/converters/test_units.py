@@ -10,8 +10,10 @@ import pytest
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.converters.components import component_names, infer_layout, split_by_prefix
+from rmb_lerobot.converters.gr00t import modality
 from rmb_lerobot.converters.lerobot_mapping import parse_key_dims, resolve_mapping
 from rmb_lerobot.converters.rate import exact_rate, lerobot_fps, nominal_rate, same_rate
+from rmb_lerobot.converters.schema import build_schema
 from rmb_lerobot.converters.shards import split
 from rmb_lerobot.converters.skip import skip_sequence
 from rmb_lerobot.episode.timing import control_rate
@@ -74,6 +76,64 @@ def test_component_names_follow_the_robot_layout():
         ("reward", 1),
     ]
     assert split_by_prefix(["shoulder_pan.pos"]) is None
+
+
+DUAL = K.RobotLayout(num_joints=14, num_grippers=2, num_eefs=2)  # RMB's dual UR5e
+
+
+def test_a_dual_arm_joint_vector_is_named_arm_by_arm():
+    """RMB orders a dual-arm joint vector per arm: left joints, left gripper, right ..."""
+    assert DUAL.arm_groups() == ((range(0, 6), range(6, 7)), (range(7, 13), range(13, 14)))
+    names = component_names(K.MEASURED_JOINT_POS, 14, DUAL, policy=False)
+    assert names[5:8] == ["joint_5_0", "gripper_0", "joint_0_1"] and names[-1] == "gripper_1"
+    assert component_names(K.COMMAND_GRIPPER_JOINT_POS, 2, DUAL, policy=False) == [
+        "gripper_0",
+        "gripper_1",
+    ]
+    assert component_names(K.MEASURED_EEF_POSE, 18, DUAL, policy=True)[9] == "x_1"
+
+
+def test_gr00t_modality_describes_each_arm_of_a_dual_robot():
+    schema = build_schema(
+        {
+            K.MEASURED_JOINT_POS: (5, 14),
+            K.MEASURED_GRIPPER_JOINT_POS: (5, 2),
+            K.COMMAND_JOINT_POS: (5, 14),
+            K.COMMAND_EEF_POSE: (5, 14),
+        },
+        {},
+        state_keys=[K.MEASURED_JOINT_POS],
+        action_keys=[K.COMMAND_JOINT_POS, K.COMMAND_EEF_POSE],
+        cameras=(),
+        depth=False,
+    )
+    state = modality(schema, ["left", "right"])["state"]
+    assert [(name, g["start"], g["end"]) for name, g in state.items()] == [
+        ("left_arm", 0, 6),
+        ("left_gripper", 6, 7),
+        ("right_arm", 7, 13),
+        ("right_gripper", 13, 14),
+    ]
+    action = modality(schema, ["left", "right"])["action"]
+    assert action["right_eef_pose_position"] == {
+        "start": 14 + 9,
+        "end": 14 + 12,
+        "original_key": N.ACTION_KEY,
+        "absolute": True,
+    }
+    assert action["right_eef_pose_rotation"]["end"] == 14 + 18
+    # Without the robot's arm names (a dataset of an unknown robot): numbered arms.
+    assert list(modality(schema)["state"]) == ["arm_0", "gripper_0", "arm_1", "gripper_1"]
+    # One arm keeps GR00T's single-arm names.
+    single = build_schema(
+        {K.MEASURED_JOINT_POS: (5, 8), K.MEASURED_GRIPPER_JOINT_POS: (5, 1)},
+        {},
+        [K.MEASURED_JOINT_POS],
+        [],
+        (),
+        False,
+    )
+    assert list(modality(single)["state"]) == ["arm", "gripper"]
 
 
 def test_feature_names_of_rmb_keys_round_trip():
