@@ -1,0 +1,89 @@
+"""RMB's other robots through the whole pipeline: expert demos -> rmb-convert -> lerobot-train.
+
+The contract tests (test_contract.py) cover each env on its own; these follow a non-UR5e
+robot's data through the converter (its ``robot_type``, its per-arm layout) and the unmodified
+``lerobot-train``, which evaluates the policy in the robot's own env type during training.
+"""
+
+from __future__ import annotations
+
+import json
+
+from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.envs.registry import ENVS
+
+
+def _info(dataset) -> dict:
+    return json.loads((dataset / "meta" / "info.json").read_text())
+
+
+def test_lerobot_train_evaluates_in_the_xarm7_cable_env(tmp_path, make_expert_dataset, lerobot_cli):
+    entry = ENVS["xarm7_cable"]
+    dataset = make_expert_dataset(entry.name, tmp_path / "demos", world_idx=(0,), size=32)
+    info = _info(dataset)
+    assert info["robot_type"] == "xarm7"
+    assert info["features"][N.STATE]["shape"] == [8]  # 7 joints + the gripper, RMB's layout
+
+    out = tmp_path / "train"
+    train = lerobot_cli(
+        "lerobot_train",
+        [
+            f"--dataset.root={dataset}",
+            "--dataset.repo_id=local/xarm7_cable",
+            "--policy.type=act",
+            "--policy.pretrained_backbone_weights=null",
+            "--policy.dim_model=32",
+            "--policy.dim_feedforward=64",
+            "--policy.chunk_size=4",
+            "--policy.n_action_steps=4",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            f"--env.type={entry.lerobot_type}",  # rmb_xarm7_cable
+            "--env.cameras=[front]",
+            "--env.image_width=32",
+            "--env.image_height=32",
+            "--env.episode_length=4",
+            "--env_eval_freq=2",
+            "--eval.n_episodes=1",
+            "--eval.batch_size=1",
+            "--steps=2",
+            "--batch_size=2",
+            "--num_workers=0",
+            f"--output_dir={out}",
+            "--wandb.enable=false",
+        ],
+        tmp_path,
+    )
+    assert train.returncode == 0, train.stderr[-3000:]
+    config = json.loads(
+        (out / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text()
+    )
+    assert config["output_features"][N.ACTION_KEY]["shape"] == [8]
+    assert list((out / "eval").glob("videos_step_*/*/*.mp4")), "no evaluation in the xArm7 env"
+
+
+def test_dual_arm_demos_convert_with_their_layout(tmp_path, make_expert_dataset):
+    """The dual UR5e's 14-number joint vector is per arm (left 6 + gripper, right 6 +
+    gripper): the feature names and GR00T's modality.json say so, with the record's arm
+    names."""
+    dataset = make_expert_dataset("ur5e_dual_cable", tmp_path / "demos", world_idx=(1,), size=16)
+    info = _info(dataset)
+    assert info["robot_type"] == "ur5e_dual"
+    names = info["features"][N.STATE]["names"]
+    assert len(names) == 14
+    assert (
+        names[6] == "measured_joint_pos.gripper_0" and names[13] == "measured_joint_pos.gripper_1"
+    )
+    modality = json.loads((dataset / N.GR00T_MODALITY_PATH).read_text())
+    assert [(name, g["start"], g["end"]) for name, g in modality["state"].items()] == [
+        ("left_arm", 0, 6),
+        ("left_gripper", 6, 7),
+        ("right_arm", 7, 13),
+        ("right_gripper", 13, 14),
+    ]
+    assert list(modality["action"])[:4] == [
+        "left_arm",
+        "left_gripper",
+        "right_arm",
+        "right_gripper",
+    ]
