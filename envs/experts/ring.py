@@ -19,11 +19,12 @@ expert adapts to every world, random shift and to how the ring sits in the grasp
 from __future__ import annotations
 
 from enum import Enum
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint
 from rmb_lerobot.envs.tasks.ring import POLE, POLE_HEIGHT, RING_RADIUS, TUBE_RADIUS
 
 
@@ -43,8 +44,32 @@ class Phase(Enum):
     RETREAT = "retreat"
 
 
+def grip_rotation(close: np.ndarray, tool: np.ndarray, closing_axis: int) -> Rotation:
+    """Eef orientation with the tool axis (eef z) along ``tool`` and the fingers closing along
+    ``close`` (orthogonal unit vectors); the fingers close along eef x (``closing_axis`` 0) or
+    eef y (1), depending on how the gripper is mounted."""
+    if closing_axis == 0:
+        return Rotation.from_matrix(np.column_stack([close, np.cross(tool, close), tool]))
+    return Rotation.from_matrix(np.column_stack([np.cross(close, tool), close, tool]))
+
+
+def down_rotation(across: np.ndarray, current: Rotation, closing_axis: int) -> Rotation:
+    """Gripper pointing down with the fingers closing along the horizontal direction
+    ``across``; of the two such orientations, the one nearer the ``current`` hand (as
+    :func:`~rmb_lerobot.envs.experts.base.top_down_rotation`, for either closing axis)."""
+    across = np.array([across[0], across[1], 0.0])
+    across /= np.linalg.norm(across)
+    if across @ current.apply(np.eye(3)[closing_axis]) < 0:
+        across = -across
+    return grip_rotation(across, np.array([0.0, 0.0, -1.0]), closing_axis)
+
+
 class RingExpert(GripperExpert):
-    """Tool point: the gripper's pinch point."""
+    """Tool point: the gripper's pinch point.
+
+    The class attributes are the UR5e's tuning; :attr:`per_robot` overrides some of them for
+    other robots (their grippers and reach differ), applied when the expert is made.
+    """
 
     approach_distance = 0.08  # pre-grasp distance of the pinch point before the ring (m)
     grasp_depth = 0.02  # pinch point beyond the tube: the tube sits between the pads (m)
@@ -57,6 +82,23 @@ class RingExpert(GripperExpert):
     laydown_points = 5
     nudge = 0.04  # after letting go, the hand moves this far outwards to push the ring over (m)
     approach_speed, lower_speed = 0.08, 0.06  # m/s
+    closing_axis = 0  # the eef axis the fingers close along (the 2F-85 on the UR5e: x)
+    per_robot: ClassVar[dict[str, dict[str, Any]]] = {
+        "xarm7": {
+            "closing_axis": 1,  # the xArm gripper sits on link 7 turned by pi/2: fingers along y
+            # Its pads' faces open towards the palm by ~3 degrees when closed on the tube, which
+            # works the tube inwards under load: grasp at the fingertips (the pads reach ~1 cm
+            # short of its TCP, ``link_tcp``), where the tube has the pads' length to go.
+            "grasp_depth": 0.005,
+        },
+    }
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        super().__init__(env, **kwargs)
+        for name, value in self.per_robot.get(self.env.robot.name, {}).items():
+            if not hasattr(type(self), name):
+                raise AttributeError(f"per_robot names {name!r}, not a RingExpert setting")
+            setattr(self, name, value)
 
     def on_reset(self) -> None:
         super().on_reset()
@@ -64,12 +106,10 @@ class RingExpert(GripperExpert):
         _, eef_rot = self.eef_world()
         # Hand along +x with the fingers closing vertically (the nearer of the two such rolls).
         close = np.array([0.0, 0.0, 1.0])
-        if close @ eef_rot.apply([1.0, 0.0, 0.0]) < 0:
+        if close @ eef_rot.apply(np.eye(3)[self.closing_axis]) < 0:
             close = -close
         tool = np.array([1.0, 0.0, 0.0])
-        self._grasp_rot = Rotation.from_matrix(
-            np.column_stack([close, np.cross(tool, close), tool])
-        )
+        self._grasp_rot = grip_rotation(close, tool, self.closing_axis)
         # The ring is tipped over away from the robot (along the horizontal line from the
         # robot's base to the pole): the hand is high only on the near side of the pole, where
         # the arm reaches easily. Hanging from the hand, the ring faces the fingers' closing
@@ -79,7 +119,7 @@ class RingExpert(GripperExpert):
         outward[2] = 0.0
         self._outward = outward / np.linalg.norm(outward)
         pitched = Rotation.from_euler("y", np.pi / 2) * self._grasp_rot
-        self._hang_rot = top_down_rotation(self._outward, pitched)
+        self._hang_rot = down_rotation(self._outward, pitched, self.closing_axis)
         self._hold = np.zeros(3)
         self._laydown: list[np.ndarray] = []
 

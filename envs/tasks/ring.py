@@ -7,6 +7,12 @@ density), hangs in the vertical y-z plane on a hook of two horizontal pegs along
 6 cm tall) stands on the table at (0, 0). As in RMB only the pole moves, by RMB's six offsets
 (x in -0.04..0.04 m, y in -0.04..0.24 m); the random shift moves it in x and y.
 
+RMB's xArm7 scene (``env_xarm7_ring.xml``) has the same objects in the same relative layout,
+moved on its own table (:data:`PLACEMENTS`, keyed by :attr:`Workspace.name`): hook at
+(0.3, -0.15), 0.25 m above the table, pole at (0.2, 0) moved along +y by 0..0.20 m, and its pole
+body origin on the table top, so there RMB's success height (origin + 0.08 m) is 2 cm above the
+pole's top.
+
 Success is RMB's ``MujocoUR5eRingEnv._get_reward`` (read in the mmurooka/RoboManipBaselines
 fork of isri-aist/RoboManipBaselines): the highest ``ring_B*`` body (points on the tube's centre
 line) must not be above ``pole body origin z + 0.08 m``, and the pole origin's xy must lie inside
@@ -33,6 +39,7 @@ the one resting on the hook, far from where the ring is gripped.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 import mujoco
@@ -57,9 +64,11 @@ TUBE_RADIUS = 0.01
 RING_MASS = 0.13
 PEG_RADIUS = 0.01
 PEG_HALF_LENGTH = 0.02
+# RMB's peg y and the hook centre between them (same in env_ur5e_ring.xml lines 57-59 and
+# env_xarm7_ring.xml lines 55-57): the pegs stand +-2 cm along y from the hook centre.
 PEG_Y = (-0.13, -0.17)
-HOOK_XY = (0.1, -0.15)  # between the pegs, on their axes
-HOOK_HEIGHT = 0.23  # above the table top
+HOOK_XY = (0.1, -0.15)  # between the pegs, on their axes (the UR5e scene's)
+HOOK_HEIGHT = 0.23  # above the table top (the UR5e scene's)
 POLE_RADIUS = 0.01
 POLE_HEIGHT = 0.06
 # RMB's success height: 0.08 m above its pole body origin, which lies 0.02 m below the pole's
@@ -67,6 +76,12 @@ POLE_HEIGHT = 0.06
 RMB_SUCCESS_HEIGHT = 0.08
 RMB_POLE_ORIGIN_DEPTH = 0.02
 SUCCESS_HEIGHT = RMB_SUCCESS_HEIGHT - RMB_POLE_ORIGIN_DEPTH  # = POLE_HEIGHT
+# kg m^2: the least armature of every arm joint under the ``discrete`` integrator, which does not
+# treat the position servos implicitly: RMB's xArm7 joints have none, and its wrist servo (kp
+# 800 on a light link) then chatters at its force limit and stays put (measured: joint 7 moved
+# 0.005 of a 0.5 rad step in 40 control steps; with 0.1 it settles). The UR5e's (Menagerie)
+# joints have 0.1 already.
+MIN_ARMATURE = 0.1
 
 
 def ring_vertex_angles(num_segments: int = NUM_SEGMENTS) -> np.ndarray:
@@ -75,12 +90,79 @@ def ring_vertex_angles(num_segments: int = NUM_SEGMENTS) -> np.ndarray:
     return np.pi / 2 + 2 * np.pi * np.arange(num_segments) / num_segments
 
 
-def ring_on_pole(points: np.ndarray, pole_base: np.ndarray) -> bool:
+@dataclass(frozen=True)
+class RingPlacement:
+    """Where a scene puts the hook and the pole (world x, y on its table), the hook's height
+    above the table top, how far RMB's pole body origin lies below the pole's base (its success
+    height is origin + 0.08 m), and the pole's six world offsets."""
+
+    hook_xy: tuple[float, float]
+    hook_height: float
+    pole_xy: tuple[float, float]
+    pole_origin_depth: float
+    world_offsets: np.ndarray
+
+    @property
+    def success_height(self) -> float:
+        """RMB's success threshold above the pole's base (m)."""
+        return RMB_SUCCESS_HEIGHT - self.pole_origin_depth
+
+
+PLACEMENTS: dict[str, RingPlacement] = {
+    # env_ur5e_ring.xml lines 45-64: ring, hook and pole bodies at (0, 0, 0.795), 2 cm below
+    # the table top (0.815); pegs at (0.1, -0.13/-0.17, 0.25) from there, i.e. 0.23 m above the
+    # table; the pole cylinder 2..8 cm above its origin.
+    "table": RingPlacement(
+        hook_xy=HOOK_XY,
+        hook_height=HOOK_HEIGHT,
+        pole_xy=(0.0, 0.0),
+        pole_origin_depth=RMB_POLE_ORIGIN_DEPTH,
+        # The six pole offsets of RMB's MujocoUR5eRingEnv (mmurooka fork, see the docstring).
+        world_offsets=np.array(
+            [
+                [0.0, -0.04, 0.0],
+                [0.04, 0.08, 0.0],
+                [-0.04, 0.08, 0.0],
+                [0.04, 0.12, 0.0],
+                [-0.04, 0.12, 0.0],
+                [0.0, 0.24, 0.0],
+            ]
+        ),
+    ),
+    # env_xarm7_ring.xml lines 43-62: ring, hook and pole bodies at (0.2, 0, 0.74), on the
+    # table top (0.74); pegs at (0.1, -0.13/-0.17, 0.25) from there; the pole cylinder 0..6 cm
+    # above its origin (line 61), so the origin is the pole's base.
+    "xarm_table": RingPlacement(
+        hook_xy=(0.3, -0.15),
+        hook_height=0.25,
+        pole_xy=(0.2, 0.0),
+        pole_origin_depth=0.0,
+        # MujocoXarm7RingEnv.py lines 26-35: the pole moves along +y, 0..0.20 m.
+        world_offsets=np.array([[0.0, 0.04 * i, 0.0] for i in range(6)]),
+    ),
+}
+"""RMB's ring layout per workspace (:attr:`Workspace.name`)."""
+
+
+def placement_for(workspace: Workspace) -> RingPlacement:
+    """The ring layout of ``workspace``; the error names the known workspaces."""
+    try:
+        return PLACEMENTS[workspace.name]
+    except KeyError:
+        raise ValueError(
+            f"the ring task has no placement for workspace {workspace.name!r}; "
+            f"known: {', '.join(sorted(PLACEMENTS))}"
+        ) from None
+
+
+def ring_on_pole(
+    points: np.ndarray, pole_base: np.ndarray, success_height: float = SUCCESS_HEIGHT
+) -> bool:
     """RMB's Ring success test on the ring's vertices (n, 3) and the pole's base centre: no
-    vertex above the pole's top (``SUCCESS_HEIGHT`` above the base, RMB's origin + 0.08 m) and
-    the pole's axis inside the ring polygon."""
+    vertex higher than ``success_height`` above the base (RMB's origin + 0.08 m: the pole's top
+    in the UR5e scene) and the pole's axis inside the ring polygon."""
     points = np.asarray(points)
-    if points[:, 2].max() > pole_base[2] + SUCCESS_HEIGHT:
+    if points[:, 2].max() > pole_base[2] + success_height:
         return False
     return inside_polygon(points[:, :2], np.asarray(pole_base)[:2])
 
@@ -120,20 +202,14 @@ class RingTask(Task):
 
     name = "ring"
     description = "Pick up the ring hanging on the hook and place it onto the pole."
-    world_offsets = np.array(
-        [
-            [0.0, -0.04, 0.0],
-            [0.04, 0.08, 0.0],
-            [-0.04, 0.08, 0.0],
-            [0.04, 0.12, 0.0],
-            [-0.04, 0.12, 0.0],
-            [0.0, 0.24, 0.0],
-        ]
-    )
+    # The default workspace's worlds; an instance has its own workspace's (``__init__``).
+    world_offsets = PLACEMENTS[RMB_TABLE.name].world_offsets
     max_episode_steps = 500
-    # RMB's MujocoUR5eRingEnv start pose: the hand points along +x at the hook's height.
     start_poses: ClassVar[StartPoses] = {
-        "ur5e": ((np.pi, -np.pi / 2, -0.75 * np.pi, -0.75 * np.pi, -0.5 * np.pi, 0.0),)
+        # RMB's MujocoUR5eRingEnv start pose: the hand points along +x at the hook's height.
+        "ur5e": ((np.pi, -np.pi / 2, -0.75 * np.pi, -0.75 * np.pi, -0.5 * np.pi, 0.0),),
+        # MujocoXarm7RingEnv.py line 21.
+        "xarm7": ((0.0, 0.0, 0.0, 0.0, np.pi, np.pi / 2, np.pi),),
     }
     num_segments = NUM_SEGMENTS
     young = 1e7  # Pa: bending stiffness E*I = 0.08 N m^2
@@ -142,11 +218,18 @@ class RingTask(Task):
 
     def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
         super().__init__(workspace)
-        self.hook_pos = workspace.table.on_top(*HOOK_XY, HOOK_HEIGHT)
-        self.pole_nominal_pos = workspace.table.on_top(0.0, 0.0)
+        self.placement = placement_for(workspace)
+        self.world_offsets = self.placement.world_offsets
+        self.success_height = self.placement.success_height
+        self.hook_pos = workspace.table.on_top(*self.placement.hook_xy, self.placement.hook_height)
+        self.pole_nominal_pos = workspace.table.on_top(*self.placement.pole_xy)
 
     def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
+        for arm in sim.robot.arms:
+            for name in arm.joints:
+                joint = spec.joint(name)
+                joint.armature = max(joint.armature, MIN_ARMATURE)
         hook = spec.worldbody.add_body(name=HOOK, pos=list(self.hook_pos))
         for name, y in ((PEG1, PEG_Y[0]), (PEG2, PEG_Y[1])):
             hook.add_geom(
@@ -234,4 +317,5 @@ class RingTask(Task):
         return scene.points(RING)[: self.num_segments]
 
     def is_success(self, scene: SceneState) -> bool:
-        return ring_on_pole(self.ring_points(scene), scene.body_pose(POLE)[0])
+        pole_base = scene.body_pose(POLE)[0]
+        return ring_on_pole(self.ring_points(scene), pole_base, self.success_height)
