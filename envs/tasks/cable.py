@@ -4,14 +4,19 @@ Geometry follows RMB's ``env_ur5e_cable.xml``: a 0.48 m cable of 1 cm radius lie
 along -y from a fixed connector at (-0.175, 0.2) to a free 4 x 3 x 3 cm end box (the part the
 robot grasps); two poles (1 cm radius, 6 cm tall, 5 cm apart along x) stand at y = 0.1, the
 first at x = -0.1. As in RMB only the poles move: in x from -0.03 to +0.12 m across the six
-worlds (the random shift moves them in x and y).
+worlds (the random shift moves them in x and y). RMB's other robots' scenes move this layout
+on their tables (:data:`PLACEMENTS`, keyed by workspace name): the Panda's and the dual UR5e's
+keep the UR5e's numbers, the xArm7's shifts it 9.5 cm along +x (connector at (-0.08, 0.2)).
 
 The cable is MuJoCo's discrete elastic rod (a 1D flex with bending/twist elasticity and
 inextensible edges), built directly with :class:`mujoco.MjSpec`: MuJoCo 4 removed the
 ``elasticity.cable`` plugin and ``composite`` in favour of this model. Its first vertex is
 pinned to the connector (a ball joint, like RMB's first hinge pair) and its last edge is
 clamped inside the end box (RMB welds the box to the last link). Rod elasticity needs MuJoCo's
-``discrete`` integrator, so this task switches the scene to it.
+``discrete`` integrator, so this task switches the scene to it. That integrator does not treat
+the arms' position servos implicitly as ``implicitfast`` does: a servo on a light joint is
+unstable (RMB's xArm7 wrist: kp 800 N m/rad on 0.0016 kg m^2, kp h^2 / I = 8, chatters at its
+force limit and never moves), so every arm joint gets at least :data:`MIN_ARMATURE`.
 
 Success is RMB's ``_get_reward``: every cable point is below the pole centre height + 0.01 m,
 the end box is beyond the second pole (x >= pole2 x) and at least 0.05 m on the robot's right
@@ -22,6 +27,7 @@ pole centres going +y (from the connector side towards the end).
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 import mujoco
@@ -48,6 +54,36 @@ POLE_RADIUS = 0.01
 POLE_HALF_HEIGHT = 0.03
 POLE_SPACING = 0.05  # pole2 is this far along +x from pole1
 _YELLOW = [1.0, 1.0, 0.2, 1.0]
+# kg m^2: the armature of RMB's UR5e (Menagerie) and Panda (panda_body.xml) joints. RMB's xArm7
+# has none, which only the implicitfast integrator tolerates (measured under ``discrete``: its
+# joint 7 stays 0.49 rad off a 0.5 rad step after 25 control steps; with 0.02 or more it
+# settles in 10).
+MIN_ARMATURE = 0.1
+
+
+@dataclass(frozen=True)
+class CablePlacement:
+    """Where a scene puts the cable's connector and the first pole (world x, y on its table);
+    the cable runs 0.48 m along -y from the connector, pole 2 stands 5 cm along +x of pole 1."""
+
+    connector_xy: tuple[float, float]
+    poles_xy: tuple[float, float]
+
+
+_UR5E_PLACEMENT = CablePlacement(
+    # env_ur5e_cable.xml lines 41 (cable) and 50 (poles); env_panda_cable.xml lines 40 and 49
+    # and env_ur5e_dual_cable.xml lines 46 and 55 use the same numbers.
+    connector_xy=(-0.175, 0.2),
+    poles_xy=(-0.1, 0.1),
+)
+PLACEMENTS: dict[str, CablePlacement] = {
+    "table": _UR5E_PLACEMENT,  # the UR5e's and the Panda's scene
+    "dual_table": _UR5E_PLACEMENT,
+    # env_xarm7_cable.xml lines 40 (cable at -0.08 0.2 0.755, end at -0.08 -0.28 on line 44)
+    # and 49 (poles at 0.02 0.1 0.74), on the xArm table (top z 0.74).
+    "xarm_table": CablePlacement(connector_xy=(-0.08, 0.2), poles_xy=(0.02, 0.1)),
+}
+"""RMB's cable layout per workspace (:attr:`Workspace.name`)."""
 
 
 def crosses_between_poles(points: np.ndarray, pole1: np.ndarray, pole2: np.ndarray) -> bool:
@@ -101,12 +137,23 @@ class CableTask(Task):
 
     def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
         super().__init__(workspace)
+        try:
+            placement = PLACEMENTS[workspace.name]
+        except KeyError:
+            raise ValueError(
+                f"the cable task has no placement for workspace {workspace.name!r}; "
+                f"known: {', '.join(sorted(PLACEMENTS))}"
+            ) from None
         table = workspace.table
-        self.anchor_pos = table.on_top(-0.175, 0.2, CABLE_RADIUS)
-        self.poles_nominal_pos = table.on_top(-0.1, 0.1)
+        self.anchor_pos = table.on_top(*placement.connector_xy, CABLE_RADIUS)
+        self.poles_nominal_pos = table.on_top(*placement.poles_xy)
 
     def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
+        for arm in sim.robot.arms:
+            for name in arm.joints:
+                joint = spec.joint(name)
+                joint.armature = max(joint.armature, MIN_ARMATURE)
         self._build_poles(spec)
         self._build_cable(spec)
 
