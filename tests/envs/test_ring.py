@@ -1,11 +1,14 @@
-"""Ring: success criterion on constructed rings, the closed rod, worlds, stability, the expert."""
+"""Ring: success criterion on constructed rings, the closed rod, worlds, stability, the expert;
+its placement on RMB's xArm7 table."""
 
 import mujoco
 import numpy as np
 import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import ENVS
 from rmb_lerobot.envs.tasks.ring import (
+    MIN_ARMATURE,
     PEG1,
     PEG2,
     POLE,
@@ -20,7 +23,7 @@ from rmb_lerobot.envs.tasks.ring import (
     inside_polygon,
     ring_on_pole,
 )
-from rmb_lerobot.envs.workspace import RMB_TABLE
+from rmb_lerobot.envs.workspace import DUAL_TABLE, RMB_TABLE, XARM_TABLE
 
 POLE_BASE = RingTask().pole_nominal_pos
 LYING_Z = RMB_TABLE.table.top_z + TUBE_RADIUS
@@ -155,3 +158,80 @@ def test_random_actions_keep_the_simulation_stable(ring_env, random_actions, see
     assert edges == pytest.approx(SEGMENT_LENGTH, rel=0.1)  # inextensible, seam closed
     # The arm may knock the ring off the hook and even off the table, but not through a surface.
     assert points[:, 2].min() > 0.5 * TUBE_RADIUS
+
+
+# ------------------------------------------------------------------ the xArm7's scene
+
+
+@pytest.fixture(scope="module")
+def xarm_env():
+    env = ENVS["xarm7_ring"].make(cameras=())
+    yield env
+    env.close()
+
+
+def test_xarm_placement_is_rmbs():
+    # env_xarm7_ring.xml: hook, pole and ring bodies at (0.2, 0, 0.74) on a table top at 0.74,
+    # pegs at (0.1, -0.13/-0.17, 0.25) from there; MujocoXarm7RingEnv: pole offsets along +y.
+    task = RingTask(XARM_TABLE)
+    assert task.hook_pos == pytest.approx([0.3, -0.15, 0.99])
+    assert task.pole_nominal_pos == pytest.approx([0.2, 0.0, 0.74])
+    assert task.world_offsets[:, 1] == pytest.approx(np.linspace(0.0, 0.2, 6))
+    assert not task.world_offsets[:, [0, 2]].any()
+    # RMB's threshold, pole origin + 0.08 m, is 2 cm above the xArm scene's pole top.
+    assert task.success_height == pytest.approx(0.08)
+    assert task.start_pose("xarm7") == ((0.0, 0.0, 0.0, 0.0, np.pi, np.pi / 2, np.pi),)
+
+
+def test_the_ur5e_placement_is_unchanged_by_the_table():
+    task = RingTask(RMB_TABLE)
+    assert task.world_offsets is RingTask.world_offsets
+    assert task.success_height == pytest.approx(SUCCESS_HEIGHT)
+
+
+def test_a_workspace_without_placement_is_refused():
+    with pytest.raises(ValueError, match=r"dual_table.*known: table, xarm_table"):
+        RingTask(DUAL_TABLE)
+
+
+def test_xarm_success_height_accepts_a_ring_just_above_the_pole():
+    task = RingTask(XARM_TABLE)
+    base = task.pole_nominal_pos
+    ring = _flat_ring(tuple(base[:2]), z=base[2] + POLE_HEIGHT + 0.015)
+    assert ring_on_pole(ring, base, task.success_height)
+    assert not ring_on_pole(ring, base)  # above the UR5e scene's threshold (the pole's top)
+    assert not ring_on_pole(_flat_ring(tuple(base[:2]), z=base[2] + 0.085), base, 0.08)
+
+
+@pytest.mark.parametrize(("seed", "world_idx"), [(0, 0), (1, 3), (2, 5)])
+def test_xarm_ring_hangs_still_on_its_hook(xarm_env, seed, world_idx):
+    env = xarm_env
+    env.reset(seed=seed, options={"world_idx": world_idx, "random_shift": 0.03})
+    hook = env.task.hook_pos
+    assert env.sim.data.geom(PEG1).xpos == pytest.approx([hook[0], -0.13, hook[2]])
+    assert env.sim.data.geom(PEG2).xpos == pytest.approx([hook[0], -0.17, hook[2]])
+    start = env.task.ring_points(env.sim)
+    assert start[:, 0] == pytest.approx(hook[0])  # in the vertical y-z plane through the hook
+    assert start[:, 2].min() > XARM_TABLE.table.top_z + 0.05  # hanging clear of the table
+    for _ in range(30):
+        env.step(env.home_command)
+    moved = env.task.ring_points(env.sim) - start
+    assert np.abs(moved).max() < 0.005
+    assert not env.task.is_success(env.sim)
+
+
+def test_xarm_arm_joints_get_the_armature_floor(xarm_env):
+    model = xarm_env.sim.model
+    for name in xarm_env.robot.arms[0].joints:
+        assert model.dof_armature[model.joint(name).dofadr[0]] >= MIN_ARMATURE
+
+
+def test_xarm_wrist_follows_a_step_command(xarm_env):
+    """Under the ``discrete`` integrator a light wrist without armature never settles."""
+    env = xarm_env
+    env.reset(seed=0, options={"world_idx": 0})
+    command = env.home_command.copy()
+    command[6] += 0.5
+    for _ in range(25):
+        env.step(command)
+    assert env.measured_joint_pos()[6] == pytest.approx(command[6], abs=0.01)
