@@ -85,7 +85,7 @@ class RingExpert(GripperExpert):
     closing_axis = 0  # the eef axis the fingers close along (the 2F-85 on the UR5e: x)
     per_robot: ClassVar[dict[str, dict[str, Any]]] = {
         "xarm7": {
-            "closing_axis": 1,  # the xArm gripper sits on link 7 turned by pi/2: fingers along y
+            "closing_axis": 1,  # the xArm gripper's fingers open along its base's (and eef) y
             # Its pads' faces open towards the palm by ~3 degrees when closed on the tube, which
             # works the tube inwards under load: grasp at the fingertips (the pads reach ~1 cm
             # short of its TCP, ``link_tcp``), where the tube has the pads' length to go.

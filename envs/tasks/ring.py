@@ -64,8 +64,8 @@ TUBE_RADIUS = 0.01
 RING_MASS = 0.13
 PEG_RADIUS = 0.01
 PEG_HALF_LENGTH = 0.02
-# RMB's peg y and the hook centre between them (same in env_ur5e_ring.xml lines 57-59 and
-# env_xarm7_ring.xml lines 55-57): the pegs stand +-2 cm along y from the hook centre.
+# RMB's peg y and the hook centre between them (the same in env_ur5e_ring.xml lines 56-59 and
+# env_xarm7_ring.xml lines 54-57): the pegs stand +-2 cm along y from the hook centre.
 PEG_Y = (-0.13, -0.17)
 HOOK_XY = (0.1, -0.15)  # between the pegs, on their axes (the UR5e scene's)
 HOOK_HEIGHT = 0.23  # above the table top (the UR5e scene's)
@@ -236,7 +236,7 @@ class RingTask(Task):
                 name=name,
                 type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                 size=[PEG_RADIUS, PEG_HALF_LENGTH, 0],
-                pos=[0, y - self.hook_pos[1], 0],
+                pos=[0, y - HOOK_XY[1], 0],  # RMB's offsets from its hook centre
                 quat=[np.cos(np.pi / 4), 0, np.sin(np.pi / 4), 0],  # axis along x
                 rgba=[0.8, 0.1, 0.5, 1.0],
             )
