@@ -7,7 +7,8 @@ Sources (RMB = RoboManipBaselines commit 8535948, paths under
   BSD-3-Clause). Its link meshes are byte-identical to RMB's ``link_base``, ``link1..7``
   (RMB draws ``end_tool.stl`` on link7 instead of ``link7.stl``); its kinematics, inertials,
   joint ranges, damping (10/10/5/5/5/2/2) and friction loss (1) are RMB's
-  ``assets/mujoco/robots/xarm7/xarm7_body.xml`` / ``xarm7_config.xml``'s;
+  ``assets/mujoco/robots/xarm7/xarm7_body.xml`` / ``xarm7_config.xml``'s; the joints' armature
+  (:data:`ARMATURE`) is not: RMB's has none, and its wrist cannot move without;
 - gripper: :mod:`~rmb_lerobot.envs.mujoco.models.xarm_gripper` (RMB's mechanism and command);
 - actuators: ``xarm7_config.xml`` lines 36-47 and 92-98 (classes size1/2/3);
 - hand camera: ``xarm7_body.xml`` lines 104-108 (RMB's D435 mount drawn as boxes);
@@ -55,6 +56,12 @@ RMB_TABLE_TOP_Z = 0.74
 # xarm7_config.xml lines 36-46: (kp, kv, |force|) of classes size1 (joints 1-2), size2 (3-5),
 # size3 (6-7); ctrlrange = the joint range (lines 35, 93-97).
 _GAINS = ((1500, 150, 50),) * 2 + ((1000, 100, 30),) * 3 + ((800, 80, 20),) * 2
+# kg m^2 per arm joint (the motors' reflected inertia). RMB's xArm7 has none; then the wrist
+# servo (kp 800 N m/rad, |force| <= 20, on ~0.0016 kg m^2 of link 7 + gripper) chatters at its
+# force limit and does not move, under implicitfast as under discrete (measured: joint 7 moved
+# 0.005 rad of a 0.5 rad step in 40 control steps; with 0.1 it is within 1.5 mrad after 20).
+# 0.1 is what RMB's UR5e (Menagerie) and Panda joints have.
+ARMATURE = 0.1
 # xarm7_body.xml line 43: the gripper base is link7 turned by pi about z.
 _GRIPPER_MOUNT_QUAT = (0.0, 0.0, 0.0, 1.0)
 _WHITE, _GRAY = (1.0, 1.0, 1.0, 1.0), (0.753, 0.753, 0.753, 1.0)  # xarm7_config.xml lines 7-8
@@ -102,6 +109,8 @@ def build_xarm7(
     spec.compiler.autolimits = True
 
     add_arm_servos(spec, JOINTS, ACTUATORS, _GAINS)
+    for joint in JOINTS:
+        spec.joint(joint).armature = ARMATURE
     link7 = spec.body("link7")
     link7.add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)  # RMB's IK frame: joint 7's
     xarm_gripper.add_xarm_gripper(spec, link7, quat=_GRIPPER_MOUNT_QUAT)
