@@ -76,12 +76,6 @@ POLE_HEIGHT = 0.06
 RMB_SUCCESS_HEIGHT = 0.08
 RMB_POLE_ORIGIN_DEPTH = 0.02
 SUCCESS_HEIGHT = RMB_SUCCESS_HEIGHT - RMB_POLE_ORIGIN_DEPTH  # = POLE_HEIGHT
-# kg m^2: the least armature of every arm joint under the ``discrete`` integrator, which does not
-# treat the position servos implicitly: RMB's xArm7 joints have none, and its wrist servo (kp
-# 800 on a light link) then chatters at its force limit and stays put (measured: joint 7 moved
-# 0.005 of a 0.5 rad step in 40 control steps; with 0.1 it settles). The UR5e's (Menagerie)
-# joints have 0.1 already.
-MIN_ARMATURE = 0.1
 
 
 def ring_vertex_angles(num_segments: int = NUM_SEGMENTS) -> np.ndarray:
@@ -226,10 +220,6 @@ class RingTask(Task):
 
     def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
-        for arm in sim.robot.arms:
-            for name in arm.joints:
-                joint = spec.joint(name)
-                joint.armature = max(joint.armature, MIN_ARMATURE)
         hook = spec.worldbody.add_body(name=HOOK, pos=list(self.hook_pos))
         for name, y in ((PEG1, PEG_Y[0]), (PEG2, PEG_Y[1])):
             hook.add_geom(
