@@ -12,12 +12,17 @@ from the block's measured pose:
    characteristic length, sticking contact inside the friction cone, sliding on its edge
    otherwise), integrated in 5 mm steps;
 3. the candidate with the best progress per unit of time (including the travel to its start)
-   towards the goal pose wins; the block's pose error counts ``yaw_weight`` metres per radian.
+   towards the target pose wins; the block's pose error counts ``yaw_weight`` metres per
+   radian. Pushes that would leave the block where the arm cannot get round it (a corner
+   within ``min_block_reach`` of its base, or off the table) are not considered.
 
-The pusher then travels to the push's start (in the table plane when that keeps clear of the
-block, else over it), pushes slowly, backs off a little, and the next push is planned from the
-block's new pose. Model errors are corrected by this replanning; the episode ends as soon as
-the block is within RMB's tolerance (the env terminates on success).
+The target is first a staging pose with the goal's yaw a few centimetres in front of the goal
+(the block turns ~140 degrees, which takes room the arm reaches all round), then the goal.
+The pusher travels to the push's start (in the table plane when that keeps clear of the block,
+else over it), settles, pushes slowly, backs off a little, and the next push is planned from
+the block's new pose: model errors are corrected by this replanning, and a push that did not
+move the block (out of the arm's reach) is not tried again from there. The episode ends as
+soon as the block is within RMB's tolerance (the env terminates on success).
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint
 from rmb_lerobot.envs.tasks.pusht import (
@@ -34,6 +40,7 @@ from rmb_lerobot.envs.tasks.pusht import (
     STEM_HALF_SIZE,
     STEM_OFFSET,
     TBLOCK,
+    wrap_angle,
     yaw_of,
 )
 
@@ -48,6 +55,10 @@ _STEM_TOP = STEM_OFFSET + _SY
 # Centre of mass in the body frame (both boxes of one density).
 _AREAS = (4 * _BX * _BY, 4 * _SX * _SY)
 COM = np.array([0.0, _AREAS[1] * STEM_OFFSET / sum(_AREAS)])
+CORNERS = np.array(
+    [(-_BX, -_BY), (_BX, -_BY), (_BX, _BY), (_SX, _BY), (_SX, _STEM_TOP), (-_SX, _STEM_TOP),
+     (-_SX, _BY), (-_BX, _BY)]
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -240,6 +251,20 @@ def predict_pushes(
     return np.array(out_pos), np.array(out_yaw), np.array(out_valid)
 
 
+@dataclass
+class Move:
+    """One straight move of the pusher: target (world), speed (m/s), arrival tolerance (m),
+    time limit (s; None: the expert's default) and whether it pushes the block."""
+
+    target: np.ndarray
+    speed: float
+    tol: float
+    rot: Rotation
+    pushing: bool = False
+    timeout: float | None = None
+    at_rest: bool = False  # also wait until the hand is still
+
+
 @dataclass(frozen=True)
 class Push:
     """A planned push: the pusher centre's start (before contact) and end, world xy."""
@@ -247,6 +272,11 @@ class Push:
     start: np.ndarray
     end: np.ndarray
     predicted_cost: float
+
+    @property
+    def direction(self) -> np.ndarray:
+        delta = self.end - self.start
+        return delta / np.linalg.norm(delta)
 
 
 class PushTExpert(GripperExpert):
@@ -256,38 +286,54 @@ class PushTExpert(GripperExpert):
     travel_height = 0.075  # pinch point above the table when passing over the block
     pusher_half = 0.014  # half size of the closed pads' square (measured, both axes)
     pusher_radius = 0.02  # a disc around the square, for clearance checks
-    clearance = 0.006  # kept between the pusher disc and the block when not pushing
-    approach = 0.012  # the push starts this far before contact
+    clearance = 0.01  # kept between the pusher disc and the block when not pushing
+    approach = 0.015  # the push starts this far before contact
     retreat = 0.01  # backing off after a push
     char_length = 0.08  # of the T's limit surface (uniform pressure: 0.067 m; corners: 0.098)
     friction = 0.8  # pad-block (MuJoCo takes the larger: the block's 1.0; conservative)
-    yaw_weight = 0.15  # m per rad in the pose error
+    yaw_weight = 0.3  # m per rad in the pose error (5 degrees weigh as 2.6 cm)
     spacing = 0.01
     angles = tuple(np.deg2rad([-30.0, 0.0, 30.0]))
     convex_margin = 0.006
     concave_margin = 0.02
     step_length = 0.005
     lengths = (0.01, 0.02, 0.03, 0.05, 0.08)
-    travel_speed = 0.25  # m/s
+    travel_speed = 0.2  # m/s
+    descend_speed = 0.1  # m/s
     push_speed = 0.08  # m/s
+    max_correction = 0.02  # m: the integral term's cap (the arm pushes no harder when blocked)
+    climb_limit = 0.008  # m: a pusher rising this much over the push height aborts the push
     overhead_time = 0.4  # s per push (accelerating, settling)
-    min_reach, max_reach = 0.16, 0.55  # pusher distance from the arm's base in the plane (m)
-    block_bounds = ((-0.12, 0.3), (-0.35, 0.35))  # block origin stays in here (table frame)
+    min_reach, max_reach = 0.19, 0.55  # pusher distance from the arm's base in the plane (m)
+    block_bounds = (0.25, 0.38)  # block origin within +- these of the table centre (m)
+    min_block_reach = 0.17  # every corner of the block stays this far from the arm's base
+    # The block is first turned to the goal's yaw at a staging pose this far from the goal,
+    # where the pusher reaches all round it, then pushed into the goal.
+    stage_offset = (0.08, -0.04)
+    stage_tolerance = (0.04, np.deg2rad(12.0))
+    no_effect = (0.002, np.deg2rad(1.0))  # a push that moved the block less did not touch it
     waypoint_timeout = 2.0  # s: a waypoint not reached by then (pushing against friction) ends
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
         kwargs.setdefault("max_speed", self.travel_speed)
+        kwargs.setdefault("max_correction", self.max_correction)
         super().__init__(env, **kwargs)
 
     def on_reset(self) -> None:
         super().on_reset()
         _, self._rot = self.eef_world()
-        self._queue: list[tuple[np.ndarray, float, float]] = []
+        self._hand_rot = self._rot
+        self._queue: list[Move] = []
         self._steps_on_target = 0
         self._closing = True
         self._base = self.sim.body_pose(self.arm.root_frame)[0][:2]
         self._table = np.array(self.env.task.workspace.table.top_centre[:2])
+        self._stage_offset = np.array(self.stage_offset)
+        self.staging = True
         self.pushes = 0
+        self._last_push: Push | None = None
+        self._last_pose = self.block_pose()
+        self._blocked: list[np.ndarray] = []  # starts of pushes that had no effect
 
     # ------------------------------------------------------------------ world
     def block_pose(self) -> tuple[np.ndarray, float]:
@@ -298,18 +344,46 @@ class PushTExpert(GripperExpert):
         pos, rot = self.sim.body_pose(GOAL)
         return pos[:2], yaw_of(rot)
 
-    def pose_cost(self, pos: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    def target_pose(self) -> tuple[np.ndarray, float]:
+        """Where the pushes aim now: the staging pose (the goal's yaw, in front of the goal)
+        while turning the block, then the goal."""
         goal, goal_yaw = self.goal_pose()
-        dyaw = np.arctan2(np.sin(yaw - goal_yaw), np.cos(yaw - goal_yaw))
-        return np.sqrt(np.sum((pos - goal) ** 2, axis=-1) + (self.yaw_weight * dyaw) ** 2)
+        if self.staging:
+            return goal + self._stage_offset, goal_yaw
+        return goal, goal_yaw
+
+    def pose_cost(self, pos: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+        target, target_yaw = self.target_pose()
+        dyaw = np.arctan2(np.sin(yaw - target_yaw), np.cos(yaw - target_yaw))
+        return np.sqrt(np.sum((pos - target) ** 2, axis=-1) + (self.yaw_weight * dyaw) ** 2)
+
+    def _update_stage(self) -> None:
+        """Leave the staging pose for the goal once the block is near it."""
+        if not self.staging:
+            return
+        pos, yaw = self.block_pose()
+        target, target_yaw = self.target_pose()
+        near = np.linalg.norm(pos - target) < self.stage_tolerance[0]
+        turned = abs(wrap_angle(yaw - target_yaw)) < self.stage_tolerance[1]
+        if near and turned:
+            self.staging = False
 
     # ------------------------------------------------------------------ planning
     def _reachable(self, xy: np.ndarray) -> np.ndarray:
         dist = np.linalg.norm(xy - self._base, axis=-1)
         return (dist >= self.min_reach) & (dist <= self.max_reach)
 
-    def plan(self) -> Push | None:
-        """The best push from the block's current pose (None: no push improves it)."""
+    def _clear_of_base(self, pos: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+        """Whether every corner of the block at each pose keeps ``min_block_reach`` from the
+        arm's base (the pusher must get round it)."""
+        c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+        x = pos[:, :1] + c * CORNERS[:, 0] - s * CORNERS[:, 1] - self._base[0]
+        y = pos[:, 1:] + s * CORNERS[:, 0] + c * CORNERS[:, 1] - self._base[1]
+        return np.hypot(x, y).min(axis=1) >= self.min_block_reach
+
+    def plan(self, fallback: bool = False) -> Push | None:
+        """The best push from the block's current pose (None: no push improves it; with
+        ``fallback`` the least harmful one)."""
         pos, yaw = self.block_pose()
         cand = candidate_pushes(
             yaw, self.spacing, self.angles, self.convex_margin, self.concave_margin
@@ -323,8 +397,10 @@ class PushTExpert(GripperExpert):
         u = cand.direction
         # Start before contact, out of the block (measured along the push direction).
         start = touch - (self.approach + self.pusher_radius - self.pusher_half) * u
-        ok = distance_to_block(start, pos, yaw) >= self.pusher_radius + 0.002
+        ok = distance_to_block(start, pos, yaw) >= self.pusher_radius + self.clearance
         ok &= self._reachable(start)
+        for blocked in self._blocked:
+            ok &= np.linalg.norm(start - blocked, axis=-1) > 0.015
         steps = round(max(self.lengths) / self.step_length)
         p_pos, p_yaw, p_valid = predict_pushes(
             pos, yaw, cand, steps, self.step_length, self.char_length, self.friction
@@ -338,25 +414,22 @@ class PushTExpert(GripperExpert):
         )
         if self.measured_tool()[2] > self.table_z() + self.push_height + 0.02:
             travel_time = travel_time + (self.travel_height - self.push_height) / self.travel_speed
-        (xlo, xhi), (ylo, yhi) = self.block_bounds
-        best, best_score = None, 0.0
+        half_x, half_y = self.block_bounds
+        best, best_score = None, -np.inf if fallback else 0.0
         for length in self.lengths:
             k = round(length / self.step_length) - 1
             end = touch + length * u
             new_pos = p_pos[k]
-            inside = (
-                (new_pos[:, 0] - self._table[0] > xlo)
-                & (new_pos[:, 0] - self._table[0] < xhi)
-                & (new_pos[:, 1] - self._table[1] > ylo)
-                & (new_pos[:, 1] - self._table[1] < yhi)
-            )
+            rel = np.abs(new_pos - self._table)
+            inside = (rel[:, 0] < half_x) & (rel[:, 1] < half_y)
+            inside &= self._clear_of_base(new_pos, p_yaw[k])
             cost = self.pose_cost(new_pos, p_yaw[k])
             valid = ok & p_valid[k] & inside & self._reachable(end)
             gain = now - cost
             push_time = (self.approach + length) / self.push_speed
             score = np.where(valid, gain / (travel_time + push_time + self.overhead_time), -np.inf)
             i = int(np.argmax(score))
-            if score[i] > best_score:
+            if np.isfinite(score[i]) and score[i] > best_score:
                 best_score = float(score[i])
                 best = Push(start=start[i], end=end[i], predicted_cost=float(cost[i]))
         return best
@@ -370,44 +443,79 @@ class PushTExpert(GripperExpert):
         fractions = np.linspace(0.0, 1.0, 9)[:, None, None]
         points = a + fractions * (b - a)
         dist = distance_to_block(points, pos, yaw).min(axis=0)
-        return dist >= self.pusher_radius + self.clearance * 0.5
+        return dist >= self.pusher_radius + self.clearance
 
     def _queue_push(self, push: Push) -> None:
         z_push = self.table_z() + self.push_height
         z_high = self.table_z() + self.travel_height
         tcp = self.measured_tool()
         pos, yaw = self.block_pose()
+        travel = self.travel_speed
+        rot = self._rot
         if not self._in_plane_path(tcp[:2], push.start[None], pos, yaw)[0]:
-            self._queue.append((np.array([*tcp[:2], z_high]), self.travel_speed, 0.01))
-            self._queue.append((np.array([*push.start, z_high]), self.travel_speed, 0.01))
-        self._queue.append((np.array([*push.start, z_push]), self.travel_speed, 0.004))
-        self._queue.append((np.array([*push.end, z_push]), self.push_speed, 0.003))
-        back = push.end + self.retreat * (push.start - push.end) / np.linalg.norm(
-            push.start - push.end
+            self._queue.append(Move(np.array([*tcp[:2], z_high]), travel, 0.01, self._hand_rot))
+            self._queue.append(Move(np.array([*push.start, z_high]), travel, 0.005, rot))
+        self._queue.append(
+            Move(np.array([*push.start, z_push]), self.descend_speed, 0.004, rot, at_rest=True)
         )
-        self._queue.append((np.array([*back, z_push]), self.travel_speed, 0.004))
+        length = float(np.linalg.norm(push.end - push.start))
+        self._queue.append(
+            Move(np.array([*push.end, z_push]), self.push_speed, 0.003, rot, pushing=True,
+                 timeout=length / self.push_speed + 0.5)
+        )  # fmt: skip
+        back = push.end + self.retreat * (push.start - push.end) / length
+        self._queue.append(Move(np.array([*back, z_push]), travel, 0.004, rot))
+        self._hand_rot = rot
         self.pushes += 1
+        self._last_push = push
+        self._last_pose = self.block_pose()
+
+    def _note_effect(self) -> None:
+        """Remember the last push's start if it did not move the block (it cannot be done from
+        here: the arm could not reach it, or it missed), so the next plan avoids it."""
+        if self._last_push is None:
+            return
+        (pos0, yaw0), (pos1, yaw1) = self._last_pose, self.block_pose()
+        moved = np.linalg.norm(pos1 - pos0) >= self.no_effect[0]
+        turned = abs(wrap_angle(yaw1 - yaw0)) >= self.no_effect[1]
+        if moved or turned:
+            self._blocked.clear()
+        else:
+            self._blocked.append(self._last_push.start)
 
     # ------------------------------------------------------------------ policy
     def waypoint(self) -> Waypoint:
+        self._track_tool_speed()
         if self._closing:
             if self._gripper_settled():
                 self._closing = False
             else:
                 return Waypoint(self._ref_pos.copy(), self._rot, self.closed_gripper)
         if self._queue:
-            target, speed, tol = self._queue[0]
+            move = self._queue[0]
             self._steps_on_target += 1
-            if self.reached(target, tol) or self._steps_on_target * self.dt > self.waypoint_timeout:
+            done = (self._arrived if move.at_rest else self.reached)(move.target, move.tol)
+            done |= self._steps_on_target * self.dt > (move.timeout or self.waypoint_timeout)
+            climbing = self.measured_tool()[2] > move.target[2] + self.climb_limit
+            if done or (move.pushing and climbing):
                 self._queue.pop(0)
                 self._steps_on_target = 0
+                if move.pushing and climbing and self._queue:  # back off upwards
+                    self._queue[0].target[2] = self.table_z() + self.travel_height
         if not self._queue:
+            self._note_effect()
+            self._update_stage()
             push = self.plan()
-            if push is None:  # nothing helps from here: wait above where the hand is
-                tcp = self.measured_tool()
+            if push is None and self.staging:
+                self.staging = False
+                push = self.plan()
+            if push is None:
+                self._blocked.clear()
+                push = self.plan(fallback=True)
+            if push is None:  # nothing helps from here: hold still
                 self.max_step = self.travel_speed * self.dt
-                return Waypoint(tcp, self._rot, self.closed_gripper)
+                return Waypoint(self._ref_pos.copy(), self._hand_rot, self.closed_gripper)
             self._queue_push(push)
-        target, speed, _ = self._queue[0]
-        self.max_step = speed * self.dt
-        return Waypoint(target, self._rot, self.closed_gripper)
+        move = self._queue[0]
+        self.max_step = move.speed * self.dt
+        return Waypoint(move.target, move.rot, self.closed_gripper)
