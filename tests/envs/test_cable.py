@@ -5,11 +5,16 @@ import numpy as np
 import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.experts.cable import CableExpert, Phase
+from rmb_lerobot.envs.registry import ENVS
 from rmb_lerobot.envs.tasks.cable import (
     CABLE,
+    CABLE_ANCHOR,
     CABLE_END,
     CABLE_LENGTH,
     CABLE_RADIUS,
+    END_BOX_HALF_SIZE,
+    MIN_ARMATURE,
     POLE1,
     POLE2,
     POLE_HALF_HEIGHT,
@@ -18,6 +23,7 @@ from rmb_lerobot.envs.tasks.cable import (
     crosses_between_poles,
     s_shape_routed,
 )
+from rmb_lerobot.envs.workspace import DUAL_TABLE, RMB_TABLE, XARM_TABLE, Table, Workspace
 
 REST_Z = CableTask().anchor_pos[2]  # cable centre line lying on the table
 P1 = CableTask().poles_nominal_pos + np.array([0.0, 0.0, POLE_HALF_HEIGHT])  # pole centres
@@ -30,6 +36,21 @@ def cable_env():
     env = RmbEnv(CableTask(), cameras=())
     yield env
     env.close()
+
+
+@pytest.fixture(scope="module")
+def robot_env():
+    """``robot_env(name)``: the registry's cable env ``name`` (physics only), built once."""
+    cache: dict[str, RmbEnv] = {}
+
+    def get(name: str) -> RmbEnv:
+        if name not in cache:
+            cache[name] = ENVS[name].make(cameras=())
+        return cache[name]
+
+    yield get
+    for env in cache.values():
+        env.close()
 
 
 def _polyline(*xy: tuple[float, float]) -> np.ndarray:
@@ -132,6 +153,119 @@ def test_worlds_shift_the_poles_only(cable_env, world_idx):
     assert points[0] == pytest.approx(ANCHOR)
     assert points[-1] == pytest.approx(ANCHOR - np.array([0.0, CABLE_LENGTH, 0.0]))
     assert not info["is_success"]
+
+
+@pytest.mark.parametrize(
+    ("workspace", "connector_xy", "poles_xy"),
+    [
+        (RMB_TABLE, (-0.175, 0.2), (-0.1, 0.1)),  # env_ur5e_cable.xml, env_panda_cable.xml
+        (DUAL_TABLE, (-0.175, 0.2), (-0.1, 0.1)),  # env_ur5e_dual_cable.xml
+        (XARM_TABLE, (-0.08, 0.2), (0.02, 0.1)),  # env_xarm7_cable.xml lines 40 and 49
+    ],
+)
+def test_placement_follows_rmbs_scene_of_each_workspace(workspace, connector_xy, poles_xy):
+    task = CableTask(workspace)
+    top = workspace.table.top_z
+    assert task.anchor_pos == pytest.approx([*connector_xy, top + CABLE_RADIUS])
+    assert task.poles_nominal_pos == pytest.approx([*poles_xy, top])
+
+
+def test_a_workspace_without_a_placement_is_refused():
+    elsewhere = Workspace("shelf", Table((0.0, 0.0, 1.0), (0.3, 0.3)), ())
+    with pytest.raises(ValueError, match="no placement for workspace 'shelf'"):
+        CableTask(elsewhere)
+
+
+@pytest.mark.parametrize("name", ["xarm7_cable", "panda_cable"])
+def test_cable_rests_straight_on_the_robots_table(robot_env, name):
+    env = robot_env(name)
+    env.reset(seed=0, options={"world_idx": 2})
+    for _ in range(30):  # hold the start pose: the cable settles where it was laid
+        env.step(env.command.astype(np.float32))
+    top = env.task.workspace.table.top_z
+    points = env.task.cable_points(env.sim)
+    # The last two vertices are clamped in the end box, which is taller than the cable.
+    assert points[:-2, 2] == pytest.approx(top + CABLE_RADIUS, abs=0.002)
+    assert env.sim.body_pose(CABLE_END)[0][2] == pytest.approx(
+        top + END_BOX_HALF_SIZE[2], abs=0.002
+    )
+    assert points[:, 0] == pytest.approx(env.task.anchor_pos[0], abs=0.002)
+    assert points[-1, 1] == pytest.approx(env.task.anchor_pos[1] - CABLE_LENGTH, abs=0.005)
+
+
+def test_success_criterion_on_the_xarm_table(robot_env):
+    env = robot_env("xarm7_cable")
+    env.reset(seed=0, options={"world_idx": 1})
+    pole1 = env.sim.geom_pose(POLE1)[0]
+    anchor = env.task.anchor_pos
+    rest_z = anchor[2]
+
+    def around_poles(*offsets: tuple[float, float]) -> np.ndarray:
+        """The connector, then points offset from pole 1, then on along -y far enough."""
+        xy = [anchor[:2], *(pole1[:2] + np.array(o) for o in offsets)]
+        xy.append(xy[-1] + np.array([0.0, -0.3]))
+        return np.array([[x, y, rest_z] for x, y in xy])
+
+    # Down the left of pole 1, up through the gap, over pole 2 and down its far side.
+    s_shape = around_poles((-0.04, -0.04), (0.025, -0.04), (0.025, 0.04), (0.1, 0.04), (0.1, -0.07))
+    _set_cable(env, _resample(s_shape, CableTask.num_vertices, CABLE_LENGTH))
+    assert env.task.is_success(env.sim)
+    # Around pole 2 instead of through the gap.
+    around = around_poles((-0.04, -0.04), (0.08, -0.04), (0.08, 0.04), (0.12, 0.04), (0.12, -0.07))
+    _set_cable(env, _resample(around, CableTask.num_vertices, CABLE_LENGTH))
+    assert not env.task.is_success(env.sim)
+
+
+@pytest.mark.parametrize("name", ["cable", "xarm7_cable", "panda_cable"])
+def test_arm_joints_are_stiff_enough_for_the_discrete_integrator(robot_env, name):
+    env = robot_env(name)
+    model = env.sim.model
+    for joint in env.robot.arms[0].joints:
+        assert model.dof_armature[model.joint(joint).dofadr[0]] >= MIN_ARMATURE
+    # RMB's xArm7 wrist has no armature: under the discrete integrator its servo chattered at
+    # the force limit and never moved. Now every joint follows a 0.3 rad step (the Panda's
+    # shoulder and elbow sag up to 0.05 rad under gravity, as in RMB).
+    env.reset(seed=0)
+    arm = env.robot.joint_slices()[0][0]
+    start = env.measured_joint_pos()[arm]
+    target = env.command.copy()
+    target[arm] += 0.3
+    for _ in range(25):
+        env.step(target.astype(np.float32))
+    assert np.all(env.measured_joint_pos()[arm] - start > 0.2)
+
+
+@pytest.mark.parametrize("name", ["cable", "xarm7_cable", "panda_cable"])
+def test_expert_grasps_the_box_with_the_fingers_across_it(robot_env, name):
+    # The fingers close along the TCP's y axis, which the eef frames turn by 0 (UR5e),
+    # 90 (xArm7) or 45 (Panda) degrees: the grasp must square the fingers on the box's
+    # 3 cm width, not twist the box between them.
+    env = robot_env(name)
+    expert = CableExpert(env)
+    env.reset(seed=4, options={"world_idx": 4, "random_shift": 0.03})
+    expert.reset()
+    yaw0 = expert._box_yaw0
+    while expert.phase is not Phase.ROUTE:
+        env.step(expert())
+    box_rot = env.sim.body_pose(CABLE_END)[1]
+    turned = np.arctan2(box_rot[1, 0], box_rot[0, 0]) - yaw0
+    assert abs((turned + np.pi) % (2 * np.pi) - np.pi) < np.deg2rad(5)
+    tcp_y = env.sim.site_pose(env.robot.arms[0].tcp_frame)[1][:, 1]
+    assert abs(tcp_y @ box_rot[:, 1]) > np.cos(np.deg2rad(5))  # fingers along the box's width
+
+
+def test_panda_expert_turns_within_reach_of_the_connector(robot_env):
+    # The Panda's fingertip pads lose the box if the cable is stretched (see robot_tuning).
+    env = robot_env("panda_cable")
+    expert = CableExpert(env)
+    assert expert.max_reach == CableExpert.robot_tuning["panda"]["max_reach"]
+    env.reset(seed=5, options={"world_idx": 5, "random_shift": 0.03})  # farthest poles
+    expert.reset()
+    anchor = env.sim.body_pose(CABLE_ANCHOR)[0]
+    turn = expert.plan_route()[: CableExpert.half_circle_points]
+    reach = [np.linalg.norm(leg.pos[:2] - anchor[:2]) for leg in turn]
+    assert max(reach) <= expert.max_reach * CABLE_LENGTH + 1e-9
+    assert CableExpert(robot_env("cable")).max_reach is None  # the UR5e's half circle
 
 
 def test_worlds_span_rmbs_pole_offsets():
