@@ -111,8 +111,14 @@ class MujocoBackend(Backend):
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
         mujoco.mj_resetData(self.model, self.data)
         self.task.apply_world(self, world_offset)
-        for qpos, (arm, _) in zip(self._arm_qpos, self._slices, strict=True):
+        for qpos, grip_qpos, scale, (arm, g) in zip(
+            self._arm_qpos, self._grip_qpos, self._grip_scale, self._slices, strict=True
+        ):
             self.data.qpos[qpos] = home[arm]
+            # Gripper joints where their measured value (scale * mean) is the start command:
+            # the Panda's fingers start open as commanded (RMB's start closed and open in the
+            # first steps); the 2F-85's and the xArm gripper's open command is their zero.
+            self.data.qpos[grip_qpos] = home[g] / scale
         self.apply_command(home)
         mujoco.mj_kinematics(self.model, self.data)
         self.task.reset_objects(self)

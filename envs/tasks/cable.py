@@ -13,10 +13,8 @@ inextensible edges), built directly with :class:`mujoco.MjSpec`: MuJoCo 4 remove
 ``elasticity.cable`` plugin and ``composite`` in favour of this model. Its first vertex is
 pinned to the connector (a ball joint, like RMB's first hinge pair) and its last edge is
 clamped inside the end box (RMB welds the box to the last link). Rod elasticity needs MuJoCo's
-``discrete`` integrator, so this task switches the scene to it. That integrator does not treat
-the arms' position servos implicitly as ``implicitfast`` does: a servo on a light joint is
-unstable (RMB's xArm7 wrist: kp 800 N m/rad on 0.0016 kg m^2, kp h^2 / I = 8, chatters at its
-force limit and never moves), so every arm joint gets at least :data:`MIN_ARMATURE`.
+``discrete`` integrator, so this task switches the scene to it (the arms' servos stay stable
+under it thanks to their joints' armature: see the xArm7 model's ``ARMATURE``).
 
 Success is RMB's ``_get_reward``: every cable point is below the pole centre height + 0.01 m,
 the end box is beyond the second pole (x >= pole2 x) and at least 0.05 m on the robot's right
@@ -54,11 +52,6 @@ POLE_RADIUS = 0.01
 POLE_HALF_HEIGHT = 0.03
 POLE_SPACING = 0.05  # pole2 is this far along +x from pole1
 _YELLOW = [1.0, 1.0, 0.2, 1.0]
-# kg m^2: the armature of RMB's UR5e (Menagerie) and Panda (panda_body.xml) joints. RMB's xArm7
-# has none, which only the implicitfast integrator tolerates (measured under ``discrete``: its
-# joint 7 stays 0.49 rad off a 0.5 rad step after 25 control steps; with 0.02 or more it
-# settles in 10).
-MIN_ARMATURE = 0.1
 
 
 @dataclass(frozen=True)
@@ -150,10 +143,6 @@ class CableTask(Task):
 
     def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
-        for arm in sim.robot.arms:
-            for name in arm.joints:
-                joint = spec.joint(name)
-                joint.armature = max(joint.armature, MIN_ARMATURE)
         self._build_poles(spec)
         self._build_cable(spec)
 
