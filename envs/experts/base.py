@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -59,6 +59,9 @@ class ScriptedExpert(ABC):
     """
 
     arm_index = 0  # the arm the expert drives
+    # Per robot short name: class attributes (the expert's settings) that robot needs other
+    # values of, each with the measurement that says why; applied when the expert is made.
+    robot_tuning: ClassVar[dict[str, dict[str, Any]]] = {}
 
     def __init__(
         self,
@@ -84,6 +87,13 @@ class ScriptedExpert(ABC):
         self._ref_rot = Rotation.identity()
         self._correction = np.zeros(3)
         self._q = self.env.home_command[self._arm_joints].copy()
+        for name, value in self.robot_tuning.get(self.env.robot.name, {}).items():
+            if not hasattr(type(self), name):
+                raise AttributeError(
+                    f"{type(self).__name__}.robot_tuning[{self.env.robot.name!r}] names "
+                    f"{name!r}, which is not one of its settings"
+                )
+            setattr(self, name, value)
 
     # ------------------------------------------------------------------ task hooks
     @abstractmethod

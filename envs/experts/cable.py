@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -97,11 +97,6 @@ class CableExpert(GripperExpert):
         # episodes and 60 of 60 in all worlds succeed (0.15 too; 0.23 none).
         "panda": {"max_reach": 1.05, "hang": 0.17},
     }
-
-    def __init__(self, env: Any, **kwargs: Any) -> None:
-        super().__init__(env, **kwargs)
-        for name, value in self.robot_tuning.get(self.env.robot.name, {}).items():
-            setattr(self, name, value)
 
     def on_reset(self) -> None:
         super().on_reset()

@@ -67,7 +67,7 @@ def down_rotation(across: np.ndarray, current: Rotation, closing_axis: int) -> R
 class RingExpert(GripperExpert):
     """Tool point: the gripper's pinch point.
 
-    The class attributes are the UR5e's tuning; :attr:`per_robot` overrides some of them for
+    The class attributes are the UR5e's tuning; :attr:`robot_tuning` overrides some of them for
     other robots (their grippers and reach differ), applied when the expert is made.
     """
 
@@ -83,7 +83,7 @@ class RingExpert(GripperExpert):
     nudge = 0.04  # after letting go, the hand moves this far outwards to push the ring over (m)
     approach_speed, lower_speed = 0.08, 0.06  # m/s
     closing_axis = 0  # the eef axis the fingers close along (the 2F-85 on the UR5e: x)
-    per_robot: ClassVar[dict[str, dict[str, Any]]] = {
+    robot_tuning: ClassVar[dict[str, dict[str, Any]]] = {
         "xarm7": {
             "closing_axis": 1,  # the xArm gripper's fingers open along its base's (and eef) y
             # Its pads' faces open towards the palm by ~3 degrees when closed on the tube, which
@@ -92,13 +92,6 @@ class RingExpert(GripperExpert):
             "grasp_depth": 0.005,
         },
     }
-
-    def __init__(self, env: Any, **kwargs: Any) -> None:
-        super().__init__(env, **kwargs)
-        for name, value in self.per_robot.get(self.env.robot.name, {}).items():
-            if not hasattr(type(self), name):
-                raise AttributeError(f"per_robot names {name!r}, not a RingExpert setting")
-            setattr(self, name, value)
 
     def on_reset(self) -> None:
         super().on_reset()

@@ -40,6 +40,20 @@ StartPoses = Mapping[str, tuple[tuple[float, ...], ...]]
 """Robot short name -> per-arm start joint angles."""
 
 
+def placement_in[Placement](
+    placements: Mapping[str, Placement], workspace: Workspace, task: str
+) -> Placement:
+    """A task's layout for ``workspace`` from its table of RMB's per-scene layouts (keyed by
+    :attr:`Workspace.name`); the error names the known workspaces."""
+    try:
+        return placements[workspace.name]
+    except KeyError:
+        raise ValueError(
+            f"the {task} task has no placement for workspace {workspace.name!r}; "
+            f"known: {', '.join(sorted(placements))}"
+        ) from None
+
+
 class Task(ABC):
     """One RMB task. Subclasses set the class attributes and implement the hooks.
 

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, ClassVar
 import mujoco
 import numpy as np
 
-from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task, placement_in
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
@@ -130,13 +130,7 @@ class CableTask(Task):
 
     def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
         super().__init__(workspace)
-        try:
-            placement = PLACEMENTS[workspace.name]
-        except KeyError:
-            raise ValueError(
-                f"the cable task has no placement for workspace {workspace.name!r}; "
-                f"known: {', '.join(sorted(PLACEMENTS))}"
-            ) from None
+        placement = placement_in(PLACEMENTS, workspace, self.name)
         table = workspace.table
         self.anchor_pos = table.on_top(*placement.connector_xy, CABLE_RADIUS)
         self.poles_nominal_pos = table.on_top(*placement.poles_xy)

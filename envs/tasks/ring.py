@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, ClassVar
 import mujoco
 import numpy as np
 
-from rmb_lerobot.envs.tasks.base import StartPoses, Task
+from rmb_lerobot.envs.tasks.base import StartPoses, Task, placement_in
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
@@ -138,17 +138,6 @@ PLACEMENTS: dict[str, RingPlacement] = {
 """RMB's ring layout per workspace (:attr:`Workspace.name`)."""
 
 
-def placement_for(workspace: Workspace) -> RingPlacement:
-    """The ring layout of ``workspace``; the error names the known workspaces."""
-    try:
-        return PLACEMENTS[workspace.name]
-    except KeyError:
-        raise ValueError(
-            f"the ring task has no placement for workspace {workspace.name!r}; "
-            f"known: {', '.join(sorted(PLACEMENTS))}"
-        ) from None
-
-
 def ring_on_pole(
     points: np.ndarray, pole_base: np.ndarray, success_height: float = SUCCESS_HEIGHT
 ) -> bool:
@@ -212,7 +201,7 @@ class RingTask(Task):
 
     def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
         super().__init__(workspace)
-        self.placement = placement_for(workspace)
+        self.placement = placement_in(PLACEMENTS, workspace, self.name)
         self.world_offsets = self.placement.world_offsets
         self.success_height = self.placement.success_height
         self.hook_pos = workspace.table.on_top(*self.placement.hook_xy, self.placement.hook_height)
