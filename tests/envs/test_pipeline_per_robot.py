@@ -1,13 +1,15 @@
-"""RMB's other robots through the whole pipeline: expert demos -> rmb-convert -> lerobot-train.
+"""Each robot's data through the whole pipeline: expert demos -> rmb-convert -> lerobot-train.
 
-The contract tests (test_contract.py) cover each env on its own; these follow a non-UR5e
-robot's data through the converter (its ``robot_type``, its per-arm layout) and the unmodified
+The contract tests (test_contract.py) cover each env on its own; these follow a robot's data
+through the converter (its ``robot_type``, its per-arm layout) and the unmodified
 ``lerobot-train``, which evaluates the policy in the robot's own env type during training.
 """
 
 from __future__ import annotations
 
 import json
+
+import pytest
 
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.envs.registry import ENVS
@@ -17,19 +19,26 @@ def _info(dataset) -> dict:
     return json.loads((dataset / "meta" / "info.json").read_text())
 
 
-def test_lerobot_train_evaluates_in_the_xarm7_cable_env(tmp_path, make_expert_dataset, lerobot_cli):
-    entry = ENVS["xarm7_cable"]
+@pytest.mark.parametrize(
+    ("name", "robot_type", "state_dim"), [("cable", "ur5e", 7), ("xarm7_cable", "xarm7", 8)]
+)
+def test_lerobot_train_evaluates_in_the_robots_env_type(
+    tmp_path, make_expert_dataset, lerobot_cli, name, robot_type, state_dim
+):
+    """The unmodified lerobot-train on a tiny dataset the cable expert recorded on this robot,
+    evaluating in the robot's env type (``--env.type=rmb_xarm7_cable``) during training."""
+    entry = ENVS[name]
     dataset = make_expert_dataset(entry.name, tmp_path / "demos", world_idx=(0,), size=32)
     info = _info(dataset)
-    assert info["robot_type"] == "xarm7"
-    assert info["features"][N.STATE]["shape"] == [8]  # 7 joints + the gripper, RMB's layout
+    assert info["robot_type"] == robot_type
+    assert info["features"][N.STATE]["shape"] == [state_dim]  # joints + gripper, RMB's layout
 
     out = tmp_path / "train"
     train = lerobot_cli(
         "lerobot_train",
         [
             f"--dataset.root={dataset}",
-            "--dataset.repo_id=local/xarm7_cable",
+            f"--dataset.repo_id=local/{name}",
             "--policy.type=act",
             "--policy.pretrained_backbone_weights=null",
             "--policy.dim_model=32",
@@ -38,7 +47,7 @@ def test_lerobot_train_evaluates_in_the_xarm7_cable_env(tmp_path, make_expert_da
             "--policy.n_action_steps=4",
             "--policy.device=cpu",
             "--policy.push_to_hub=false",
-            f"--env.type={entry.lerobot_type}",  # rmb_xarm7_cable
+            f"--env.type={entry.lerobot_type}",
             "--env.cameras=[front]",
             "--env.image_width=32",
             "--env.image_height=32",
@@ -55,11 +64,11 @@ def test_lerobot_train_evaluates_in_the_xarm7_cable_env(tmp_path, make_expert_da
         tmp_path,
     )
     assert train.returncode == 0, train.stderr[-3000:]
-    config = json.loads(
-        (out / "checkpoints" / "last" / "pretrained_model" / "config.json").read_text()
-    )
-    assert config["output_features"][N.ACTION_KEY]["shape"] == [8]
-    assert list((out / "eval").glob("videos_step_*/*/*.mp4")), "no evaluation in the xArm7 env"
+    checkpoint = out / "checkpoints" / "last" / "pretrained_model"
+    assert (checkpoint / "model.safetensors").exists()
+    config = json.loads((checkpoint / "config.json").read_text())
+    assert config["output_features"][N.ACTION_KEY]["shape"] == [state_dim]
+    assert list((out / "eval").glob("videos_step_*/*/*.mp4")), f"no evaluation in {name}"
 
 
 def test_dual_arm_demos_convert_with_their_layout(tmp_path, make_expert_dataset):
