@@ -27,23 +27,16 @@ import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.mujoco.models.common import euler_quat
+from rmb_lerobot.envs.robots import XARM7
 
 ROOT_BODY = "xarm_gripper_base_link"
-TCP_SITE = "link_tcp"
+_GRIPPER = XARM7.arms[0].gripper  # the record: joints in RMB's order, command, scale
+TCP_SITE = XARM7.arms[0].tcp_frame
 ACTUATOR = "gripper"
 TENDON = "split"
-# RMB MujocoXarm7EnvBase._get_obs (lines 103-124): the order RMB reads them in.
-JOINTS = (
-    "left_driver_joint",
-    "left_finger_joint",
-    "left_inner_knuckle_joint",
-    "right_driver_joint",
-    "right_finger_joint",
-    "right_inner_knuckle_joint",
-)
-CTRL_RANGE = (0.0, 255.0)
-# Measured gripper value = mean(JOINTS) / 0.8 * 255 (RMB _get_obs line 124).
-SCALE = 255.0 / 0.8
+JOINTS = _GRIPPER.joints  # RMB MujocoXarm7EnvBase._get_obs (lines 103-124)
+CTRL_RANGE = _GRIPPER.command_range
+SCALE = _GRIPPER.measured_scale  # mean(JOINTS) / 0.8 * 255 (RMB _get_obs line 124)
 
 _WHITE, _BLACK, _GRAY = (1.0, 1.0, 1.0, 1.0), (0.149, 0.149, 0.149, 1.0), (0.55, 0.55, 0.55, 1.0)
 # xarm7_config.xml lines 48-56 (classes spring_link, driver, follower); solimp's two trailing
