@@ -30,10 +30,11 @@ DEPTH_UNITS = {"mm": 1e-3, "m": 1.0}  # metres per depth unit
 DEFAULT_CAMERA_FOVY = 45.0  # RMB's fixed UR5e cameras (front, left, right); the hand camera: 62
 
 
-@PreTrainedConfig.register_subclass("dp3")
 @dataclass
-class DP3Config(PreTrainedConfig):
-    """Point cloud + state -> DDIM-denoised action chunk.
+class PointCloudUnetConfig(PreTrainedConfig):
+    """What DP3 and the policies built on its networks share (Flow Policy): observation windows,
+    the depth -> point cloud settings, the PointNet and state encoders, the U-Net, the optimizer.
+    Not a policy type itself; :class:`DP3Config` adds the DDIM settings.
 
     Args:
         n_obs_steps: Observation frames the policy conditions on (the current one and earlier).
@@ -61,8 +62,6 @@ class DP3Config(PreTrainedConfig):
         state_mlp_dims: Hidden and output sizes of the state MLP.
         down_dims, kernel_size, n_groups, diffusion_step_embed_dim, use_film_scale_modulation:
             The U-Net, LeRobot's ``DiffusionConditionalUnet1d`` (FiLM conditioning).
-        num_train_timesteps, num_inference_steps, beta_*, prediction_type, clip_sample*:
-            diffusers' ``DDIMScheduler``, used for both training noise and sampling, as DP3.
         do_mask_loss_for_padding: Ignore actions past an episode's end (DP3 trains on them:
             LeRobot pads with copies of the last action, which teaches holding still).
     """
@@ -99,15 +98,6 @@ class DP3Config(PreTrainedConfig):
     diffusion_step_embed_dim: int = 128
     use_film_scale_modulation: bool = True
     gradient_checkpointing: bool = False
-
-    num_train_timesteps: int = 100
-    num_inference_steps: int = 10
-    beta_schedule: str = "squaredcos_cap_v2"
-    beta_start: float = 1e-4
-    beta_end: float = 0.02
-    prediction_type: str = "sample"
-    clip_sample: bool = True
-    clip_sample_range: float = 1.0
     do_mask_loss_for_padding: bool = False
 
     optimizer_lr: float = 1e-4
@@ -121,7 +111,9 @@ class DP3Config(PreTrainedConfig):
         super().__post_init__()
         visual = NormalizationMode(self.normalization_mapping["VISUAL"])
         if visual is not NormalizationMode.IDENTITY:
-            raise ValueError("DP3 needs VISUAL: IDENTITY; normalising depth breaks the geometry.")
+            raise ValueError(
+                f"{self.type} needs VISUAL: IDENTITY; normalising depth breaks the geometry."
+            )
         if not 1 <= self.n_action_steps <= self.horizon - self.n_obs_steps + 1:
             raise ValueError(
                 f"n_action_steps ({self.n_action_steps}) must be in 1..horizon - n_obs_steps + 1 "
@@ -136,8 +128,6 @@ class DP3Config(PreTrainedConfig):
             raise ValueError("depth_stride and num_points must be >= 1")
         if any(lo > hi for lo, hi in zip(self.crop_min, self.crop_max, strict=True)):
             raise ValueError(f"crop_min {self.crop_min} must be <= crop_max {self.crop_max}")
-        if self.prediction_type not in ("sample", "epsilon"):
-            raise ValueError("prediction_type must be 'sample' or 'epsilon'")
 
     @property
     def depth_key(self) -> str:
@@ -153,8 +143,8 @@ class DP3Config(PreTrainedConfig):
         ]
         if len(depth) != 1:
             raise ValueError(
-                f"DP3 needs exactly one depth camera or --policy.camera; depth inputs: {depth}. "
-                "Convert with 'rmb-convert to-lerobot --depth'."
+                f"{self.type} needs exactly one depth camera or --policy.camera; depth inputs: "
+                f"{depth}. Convert with 'rmb-convert to-lerobot --depth'."
             )
         return depth[0]
 
@@ -171,12 +161,12 @@ class DP3Config(PreTrainedConfig):
 
     def validate_features(self) -> None:
         if not self.robot_state_feature:
-            raise ValueError("DP3 needs 'observation.state'.")
+            raise ValueError(f"{self.type} needs 'observation.state'.")
         if self.action_feature is None:
-            raise ValueError("DP3 needs an 'action' output feature.")
+            raise ValueError(f"{self.type} needs an 'action' output feature.")
         depth = self.input_features.get(self.depth_key)
         if depth is None or depth.shape[0] != 1:
-            raise ValueError(f"DP3 needs a 1-channel depth input {self.depth_key!r}.")
+            raise ValueError(f"{self.type} needs a 1-channel depth input {self.depth_key!r}.")
         if self.color_key is not None:
             rgb = self.input_features.get(self.color_key)
             if rgb is None or tuple(rgb.shape) != (3, *depth.shape[1:]):
@@ -209,3 +199,28 @@ class DP3Config(PreTrainedConfig):
     @property
     def reward_delta_indices(self) -> None:
         return None
+
+
+@PreTrainedConfig.register_subclass("dp3")
+@dataclass
+class DP3Config(PointCloudUnetConfig):
+    """Point cloud + state -> DDIM-denoised action chunk.
+
+    Args (besides :class:`PointCloudUnetConfig`'s):
+        num_train_timesteps, num_inference_steps, beta_*, prediction_type, clip_sample*:
+            diffusers' ``DDIMScheduler``, used for both training noise and sampling, as DP3.
+    """
+
+    num_train_timesteps: int = 100
+    num_inference_steps: int = 10
+    beta_schedule: str = "squaredcos_cap_v2"
+    beta_start: float = 1e-4
+    beta_end: float = 0.02
+    prediction_type: str = "sample"
+    clip_sample: bool = True
+    clip_sample_range: float = 1.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.prediction_type not in ("sample", "epsilon"):
+            raise ValueError("prediction_type must be 'sample' or 'epsilon'")

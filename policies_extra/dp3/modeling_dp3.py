@@ -26,7 +26,7 @@ from lerobot.policies.utils import populate_queues
 from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
 
-from .configuration_dp3 import DP3Config
+from .configuration_dp3 import DP3Config, PointCloudUnetConfig
 from .point_cloud import DepthPointClouds, resolve_camera_fovy
 
 POINT_CLOUD = "observation.point_cloud"  # (B, n_obs_steps, num_points, 3 or 6), made here
@@ -38,15 +38,19 @@ class DP3Policy(PreTrainedPolicy):
     config_class = DP3Config
     name = "dp3"
 
-    def __init__(self, config: DP3Config, dataset_meta=None, **kwargs):
+    def __init__(self, config: PointCloudUnetConfig, dataset_meta=None, **kwargs):
         """``dataset_meta`` (from ``make_policy`` when training) supplies the camera's fovy."""
         super().__init__(config)
         config.validate_features()
         resolve_camera_fovy(config, dataset_meta)
         self.config = config
         self.point_clouds = DepthPointClouds(config)
-        self.model = DP3Model(config)
+        self.model = self.make_model(config)
         self.reset()
+
+    def make_model(self, config: PointCloudUnetConfig) -> PointCloudUnet:
+        """The networks with their generative process (policies built on DP3 swap it)."""
+        return DP3Model(config)
 
     @property
     def observation_keys(self) -> tuple[str, ...]:
@@ -73,8 +77,12 @@ class DP3Policy(PreTrainedPolicy):
         missing = [k for k in self.observation_keys if k not in batch]
         if missing:
             raise KeyError(
-                f"DP3 needs {missing}: RMB env types deliver depth with --env.depth=true"
+                f"{self.name} needs {missing}: RMB env types deliver depth with --env.depth=true"
             )
+
+    def sampling_model(self) -> PointCloudUnet:
+        """The network that predicts actions (an EMA copy of :attr:`model` may stand in)."""
+        return self.model
 
     def _window_from_history(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
         """Append one observation (B, ...) to the history; the last ``n_obs_steps`` frames."""
@@ -92,7 +100,7 @@ class DP3Policy(PreTrainedPolicy):
         self.eval()
         if batch[OBS_STATE].ndim == 2:
             batch = self._window_from_history(batch)
-        return self.model.generate_actions(*self.model_inputs(batch), noise=noise)
+        return self.sampling_model().generate_actions(*self.model_inputs(batch), noise=noise)
 
     @torch.no_grad()
     def select_action(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
@@ -100,7 +108,7 @@ class DP3Policy(PreTrainedPolicy):
         window = self._window_from_history(batch)
         if not self._queues[ACTION]:
             self.eval()
-            chunk = self.model.generate_actions(*self.model_inputs(window), noise=noise)
+            chunk = self.sampling_model().generate_actions(*self.model_inputs(window), noise=noise)
             self._queues[ACTION].extend(chunk.transpose(0, 1))
         return self._queues[ACTION].popleft()
 
@@ -137,10 +145,11 @@ def mlp(in_dim: int, dims: tuple[int, ...]) -> nn.Sequential:
     return nn.Sequential(*layers[:-1])
 
 
-class DP3Model(nn.Module):
-    """Observation encoders, the conditional U-Net and the DDIM noise scheduler."""
+class PointCloudUnet(nn.Module):
+    """DP3's networks without a generative process: the observation encoders (the global
+    condition) and the conditional U-Net; subclasses add training loss and sampling."""
 
-    def __init__(self, config: DP3Config):
+    def __init__(self, config: PointCloudUnetConfig):
         super().__init__()
         self.config = config
         self.point_encoder = PointNetEncoder(
@@ -149,6 +158,38 @@ class DP3Model(nn.Module):
         self.state_encoder = mlp(config.robot_state_feature.shape[0], tuple(config.state_mlp_dims))
         cond_dim = (config.encoder_output_dim + config.state_mlp_dims[-1]) * config.n_obs_steps
         self.unet = DiffusionConditionalUnet1d(config, global_cond_dim=cond_dim)
+
+    def global_condition(self, state: Tensor, cloud: Tensor) -> Tensor:
+        """(B, T, S) states and (B, T, P, C) clouds -> (B, T * (64 + state feature))."""
+        features = torch.cat([self.point_encoder(cloud), self.state_encoder(state)], dim=-1)
+        return features.flatten(start_dim=1)
+
+    def reduce_loss(self, loss: Tensor, is_pad: Tensor | None) -> Tensor:
+        """Mean of an elementwise (B, horizon, A) loss, over real actions only if configured."""
+        if self.config.do_mask_loss_for_padding and is_pad is not None:
+            valid = (~is_pad).unsqueeze(-1).expand_as(loss)
+            return (loss * valid).sum() / valid.sum().clamp_min(1)
+        return loss.mean()
+
+    def executed(self, chunk: Tensor) -> Tensor:
+        """The ``n_action_steps`` of a (B, horizon, A) chunk from the current frame on."""
+        start = self.config.n_obs_steps - 1
+        return chunk[:, start : start + self.config.n_action_steps]
+
+    def compute_loss(
+        self, state: Tensor, cloud: Tensor, actions: Tensor, is_pad: Tensor | None = None
+    ) -> Tensor:
+        raise NotImplementedError
+
+    def generate_actions(self, state: Tensor, cloud: Tensor, noise: Tensor | None = None) -> Tensor:
+        raise NotImplementedError
+
+
+class DP3Model(PointCloudUnet):
+    """Observation encoders, the conditional U-Net and the DDIM noise scheduler."""
+
+    def __init__(self, config: DP3Config):
+        super().__init__(config)
         self.noise_scheduler = DDIMScheduler(
             num_train_timesteps=config.num_train_timesteps,
             beta_start=config.beta_start,
@@ -161,11 +202,6 @@ class DP3Model(nn.Module):
             prediction_type=config.prediction_type,
         )
 
-    def global_condition(self, state: Tensor, cloud: Tensor) -> Tensor:
-        """(B, T, S) states and (B, T, P, C) clouds -> (B, T * (64 + state feature))."""
-        features = torch.cat([self.point_encoder(cloud), self.state_encoder(state)], dim=-1)
-        return features.flatten(start_dim=1)
-
     def compute_loss(
         self, state: Tensor, cloud: Tensor, actions: Tensor, is_pad: Tensor | None = None
     ) -> Tensor:
@@ -177,11 +213,7 @@ class DP3Model(nn.Module):
         noisy = self.noise_scheduler.add_noise(actions, noise, timesteps)
         pred = self.unet(noisy, timesteps, global_cond=cond)
         target = actions if self.config.prediction_type == "sample" else noise
-        loss = F.mse_loss(pred, target, reduction="none")
-        if self.config.do_mask_loss_for_padding and is_pad is not None:
-            valid = (~is_pad).unsqueeze(-1).expand_as(loss)
-            return (loss * valid).sum() / valid.sum().clamp_min(1)
-        return loss.mean()
+        return self.reduce_loss(F.mse_loss(pred, target, reduction="none"), is_pad)
 
     def generate_actions(self, state: Tensor, cloud: Tensor, noise: Tensor | None = None) -> Tensor:
         """DDIM sampling of a horizon; returns its ``n_action_steps`` from the current frame."""
@@ -194,5 +226,4 @@ class DP3Model(nn.Module):
             steps = torch.full((shape[0],), int(t), dtype=torch.long, device=state.device)
             output = self.unet(sample, steps, global_cond=cond)
             sample = self.noise_scheduler.step(output, t, sample).prev_sample
-        start = cfg.n_obs_steps - 1
-        return sample[:, start : start + cfg.n_action_steps]
+        return self.executed(sample)

@@ -22,7 +22,7 @@ from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.pointcloud import crop_points, depth_to_points, farthest_point_sample
 
-from .configuration_dp3 import DEFAULT_CAMERA_FOVY, DEPTH_UNITS, DP3Config
+from .configuration_dp3 import DEFAULT_CAMERA_FOVY, DEPTH_UNITS, PointCloudUnetConfig
 
 logger = logging.getLogger(__name__)
 
@@ -33,9 +33,9 @@ class DepthPointClouds:
     Points are in metres in the camera frame (x right, y down, z forward), colours in [0, 1].
     """
 
-    def __init__(self, config: DP3Config):
+    def __init__(self, config: PointCloudUnetConfig):
         if config.camera_fovy is None:
-            raise ValueError("camera_fovy is unset: see DP3Config.camera_fovy")
+            raise ValueError("camera_fovy is unset: see the policy config's camera_fovy")
         self.fovy = float(config.camera_fovy)
         self.scale = DEPTH_UNITS[config.depth_unit]
         self.stride = config.depth_stride
@@ -104,7 +104,7 @@ def fovy_from_dataset(meta: Any, camera: str) -> float | None:
     return float(values.pop()) if values else None
 
 
-def resolve_camera_fovy(config: DP3Config, dataset_meta: Any | None) -> None:
+def resolve_camera_fovy(config: PointCloudUnetConfig, dataset_meta: Any | None) -> None:
     """Fill ``config.camera_fovy`` from the dataset (or the default); check it if it is set."""
     camera = N.camera_of_image_key(config.depth_key).removesuffix(N.DEPTH_CAMERA_SUFFIX)
     recorded = fovy_from_dataset(dataset_meta, camera) if dataset_meta is not None else None
