@@ -1,0 +1,262 @@
+"""Flow Policy as a LeRobot plugin: DP3's networks, consistency flow matching, one-step sampling.
+
+The point-cloud pipeline is DP3's and tested in ``test_dp3.py``; here: the config defaults (RMB's),
+the training objective, one-step inference, the EMA copy, persistence and the CLIs.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs.policies import PreTrainedConfig
+from lerobot.configs.types import FeatureType, PolicyFeature
+from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+
+from rmb_lerobot.policies_extra.dp3 import DP3Policy
+from rmb_lerobot.policies_extra.flow_policy import FlowPolicy, FlowPolicyConfig
+from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import ema_decay
+from rmb_lerobot.registration import registered_policy_types
+
+STATE_DIM = ACTION_DIM = 7
+SIZE = 32
+DEPTH = "observation.images.front_depth"
+TINY = {
+    "num_points": 64,
+    "encoder_channels": (16, 32),
+    "encoder_output_dim": 16,
+    "state_mlp_dims": (16, 16),
+    "down_dims": (32, 64),
+    "diffusion_step_embed_dim": 16,
+    "camera_fovy": 45.0,
+    "device": "cpu",
+}
+
+
+def features() -> tuple[dict, dict]:
+    inputs = {
+        "observation.state": PolicyFeature(FeatureType.STATE, (STATE_DIM,)),
+        DEPTH: PolicyFeature(FeatureType.VISUAL, (1, SIZE, SIZE)),
+    }
+    return inputs, {"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))}
+
+
+def make_flow_policy(**overrides) -> FlowPolicy:
+    inputs, outputs = features()
+    torch.manual_seed(0)
+    config = FlowPolicyConfig(input_features=inputs, output_features=outputs, **TINY | overrides)
+    return FlowPolicy(config)
+
+
+def box_depth_mm(batch_shape: tuple[int, ...], seed: int = 0) -> torch.Tensor:
+    """A table at 0.8 m with a box at 0.6 m whose position depends on ``seed``; wall at 3 m."""
+    g = torch.Generator().manual_seed(seed)
+    depth = torch.full((*batch_shape, 1, SIZE, SIZE), 800.0)
+    depth[..., : SIZE // 4, :] = 3000.0
+    row, col = (int(v) for v in torch.randint(SIZE // 4, SIZE - 8, (2,), generator=g))
+    depth[..., row : row + 8, col : col + 8] = 600.0
+    return depth
+
+
+def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
+    g = torch.Generator().manual_seed(seed)
+    return {
+        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
+        DEPTH: box_depth_mm((batch,), seed),
+    }
+
+
+def windows(batch: int, policy: FlowPolicy) -> dict[str, torch.Tensor]:
+    """Training windows whose actions follow the box position (learnable from the cloud)."""
+    cfg = policy.config
+    depth = torch.cat([box_depth_mm((1, cfg.n_obs_steps), seed=i) for i in range(batch)])
+    box = (depth[:, -1, 0] < 700).nonzero()[:, 1:].float().view(batch, -1, 2).mean(1) / SIZE
+    action = box.repeat(1, 4)[:, :ACTION_DIM, None].transpose(1, 2).repeat(1, cfg.horizon, 1)
+    return {
+        "observation.state": torch.zeros(batch, cfg.n_obs_steps, STATE_DIM),
+        DEPTH: depth,
+        "action": 2 * action - 1,
+        "action_is_pad": torch.zeros(batch, cfg.horizon, dtype=torch.bool),
+    }
+
+
+def test_flow_policy_is_our_policy_type_and_found_by_lerobots_convention():
+    assert "flow_policy" in registered_policy_types()
+    assert PreTrainedConfig.get_choice_class("flow_policy") is FlowPolicyConfig
+    assert get_policy_class("flow_policy") is FlowPolicy
+    assert issubclass(FlowPolicy, DP3Policy)  # DP3's inputs, history and action queue
+
+
+def test_config_defaults_are_rmbs():
+    config = FlowPolicyConfig(device="cpu")
+    # RMB TrainFlowPolicy: horizon 8, 2 observations, 4 actions; Conditional_ConsistencyFM.
+    assert (config.horizon, config.n_obs_steps, config.n_action_steps) == (8, 2, 4)
+    assert config.action_delta_indices == list(range(-1, 7))
+    assert (config.num_segments, config.eps, config.delta, config.alpha) == (2, 1e-2, 1e-2, 1e-5)
+    assert (config.boundary, config.num_inference_steps, config.use_ema) == (1.0, 1, True)
+    with pytest.raises(ValueError, match="num_segments"):
+        FlowPolicyConfig(num_segments=0)
+    with pytest.raises(ValueError, match="n_action_steps"):
+        FlowPolicyConfig(n_action_steps=8)
+
+
+def test_ema_decay_warms_up_like_diffusion_policys_ema():
+    decays = [ema_decay(n, power=0.75, max_decay=0.9999) for n in range(1, 6)]
+    assert decays[:2] == [0.0, 0.0]  # the first two updates copy the weights
+    assert decays[2] == pytest.approx(1 - 2**-0.75)
+    assert all(a < b for a, b in itertools.pairwise(decays[2:]))
+    assert ema_decay(10**9, power=0.75, max_decay=0.9999) == 0.9999
+
+
+def test_shapes_a_training_step_and_the_ema_update():
+    policy = make_flow_policy()
+    batch = windows(4, policy)
+    state, cloud = policy.model_inputs(batch)
+    assert state.shape == (4, 2, STATE_DIM) and cloud.shape == (4, 2, 64, 3)
+
+    params = policy.get_optim_params()
+    assert all(p.requires_grad for p in params)
+    assert not any(p.requires_grad for p in policy.ema_model.parameters())  # not optimised
+    policy.train()
+    loss, _ = policy.forward(batch)
+    loss.backward()
+    torch.optim.AdamW(params, lr=1e-2).step()
+    assert torch.isfinite(loss)
+
+    ema = next(policy.ema_model.parameters())
+    trained = next(policy.model.parameters())
+    assert not torch.equal(ema, trained)
+    policy.update()  # what lerobot-train calls after each optimizer step; the first copies
+    assert torch.equal(ema, trained) and int(policy.ema_updates) == 1
+    assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
+
+
+def test_the_straight_path_velocity_minimises_the_loss():
+    """Consistency flow matching is minimal (zero) for the velocity of the straight noise ->
+    action path, the field whose one Euler step from noise gives the actions."""
+    policy = make_flow_policy()
+    batch = windows(8, policy)
+    state, cloud = policy.model_inputs(batch)
+    actions = batch["action"]
+
+    def straight(scale: float):
+        return lambda x, t, cond: scale * (actions - x) / (1 - t).clamp_min(1e-6).view(-1, 1, 1)
+
+    policy.model.velocity = straight(1.0)
+    torch.manual_seed(0)
+    assert policy.model.compute_loss(state, cloud, actions) < 1e-10
+    policy.model.velocity = straight(1.2)
+    torch.manual_seed(0)
+    assert policy.model.compute_loss(state, cloud, actions) > 1e-6
+
+
+def test_loss_and_one_step_error_decrease_on_a_tiny_batch():
+    """The loss is O(delta^2) and noisy (fresh noise and times every step), so it is compared
+    on the same draws before and after training."""
+    policy = make_flow_policy()
+    batch = windows(8, policy)
+    state, cloud = policy.model_inputs(batch)
+    target = policy.model.executed(batch["action"])
+
+    def evaluate() -> tuple[float, float]:
+        with torch.no_grad():
+            torch.manual_seed(123)
+            loss = np.mean([policy.forward(batch)[0].item() for _ in range(8)])
+            torch.manual_seed(1)
+            error = (policy.model.generate_actions(state, cloud) - target).abs().mean().item()
+        return loss, error
+
+    loss_before, error_before = evaluate()
+    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
+    policy.train()
+    torch.manual_seed(0)
+    for _ in range(100):
+        loss, _ = policy.forward(batch)
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+    loss_after, error_after = evaluate()
+    assert loss_after < 0.7 * loss_before  # about 0.5 after 100 steps
+    assert error_after < 0.9 * error_before  # one step from noise moves towards the actions
+
+
+def test_one_step_inference_is_deterministic_given_a_seed():
+    policy = make_flow_policy()
+    obs = observation(2)
+
+    def chunk(seed: int) -> torch.Tensor:
+        policy.reset()
+        torch.manual_seed(seed)
+        return policy.predict_action_chunk(obs)
+
+    first = chunk(3)
+    assert first.shape == (2, 4, ACTION_DIM) and torch.isfinite(first).all()
+    torch.testing.assert_close(chunk(3), first)
+    assert not torch.allclose(chunk(4), first)  # the noise is the only randomness
+
+    # select_action executes that chunk step by step, then plans again.
+    noise = torch.randn(2, policy.config.horizon, ACTION_DIM)
+    policy.reset()
+    expected = policy.predict_action_chunk(obs, noise=noise)
+    policy.reset()
+    actions = [policy.select_action(obs, noise=noise) for _ in range(4)]
+    torch.testing.assert_close(torch.stack(actions, dim=1), expected)
+
+
+def test_few_step_inference_is_a_config_choice():
+    policy = make_flow_policy(num_inference_steps=3)
+    noise = torch.randn(1, policy.config.horizon, ACTION_DIM)
+    chunk = policy.predict_action_chunk(observation(1), noise=noise)
+    assert chunk.shape == (1, 4, ACTION_DIM)
+
+
+def test_save_load_round_trip_gives_identical_actions(tmp_path):
+    policy = make_flow_policy()
+    policy.train()
+    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=1e-2)
+    for _ in range(3):  # the EMA copy now differs from the trained weights
+        loss, _ = policy.forward(windows(2, policy))
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        policy.update()
+    stats = {
+        "observation.state": {"min": -torch.ones(STATE_DIM), "max": torch.ones(STATE_DIM)},
+        "action": {"min": torch.zeros(ACTION_DIM), "max": torch.full((ACTION_DIM,), 2.0)},
+    }
+    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
+    for part in (policy, pre, post):
+        part.save_pretrained(tmp_path)
+
+    config = PreTrainedConfig.from_pretrained(tmp_path)
+    assert config.type == "flow_policy" and config.camera_fovy == 45.0
+    loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+    assert int(loaded.ema_updates) == 3
+    pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
+
+    obs = observation(1)
+    noise = torch.randn(1, config.horizon, ACTION_DIM)
+    policy.reset()
+    loaded.reset()
+    expected = post(policy.select_action(pre(obs), noise=noise))
+    torch.testing.assert_close(post2(loaded.select_action(pre2(obs), noise=noise)), expected)
+
+
+def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on):
+    result = train_and_eval_on(
+        expert_depth_dataset,
+        "flow_policy",
+        ["--policy.num_points=64", "--policy.down_dims=[32,64]"],
+        [
+            "--env.cameras=[front]",
+            f"--env.image_width={SIZE}",
+            f"--env.image_height={SIZE}",
+            "--env.depth=true",  # delivers observation.images.front_depth
+        ],
+    )
+    config = result["config"]
+    assert config["type"] == "flow_policy" and config["camera_fovy"] == 45.0
+    assert (config["horizon"], config["num_inference_steps"]) == (8, 1)
+    assert result["eval"]["overall"]["n_episodes"] == 1
