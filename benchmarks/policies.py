@@ -2,19 +2,20 @@
 
 Usage::
 
-    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn dp3 act diffusion] [--threads 1]
+    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn dp3 flow_policy act diffusion]
+        [--threads 1]
 
 Every policy gets its default configuration (backbones randomly initialised: no weights are
 downloaded) and the same inputs: a 7-D state and ``--cameras`` RGB cameras of ``--image-size``.
 LeRobot's ACT and Diffusion are measured in the same run as references. A training step is
 forward + backward + the policy's own optimizer preset on a random batch shaped by the
 policy's delta indices (so SARNN's batch holds ``sequence_length`` steps per sample, ACT's a
-100-action chunk). DP3 also gets the first camera's depth (a random surface 0.5-1.2 m away, in
-mm as LeRobot decodes it) and samples its point clouds anew every step (cache off: the cost of
-a first epoch; later epochs reuse the clouds of frames already seen). "query" is one call of
-``select_action`` right after ``reset()`` (always a model evaluation); "per env step" is the
-mean over a 100-step rollout, where chunking policies reuse queued actions and SARNN holds its
-command for ``frame_skip`` steps.
+100-action chunk). DP3 and Flow Policy also get the first camera's depth (a random surface
+0.5-1.2 m away, in mm as LeRobot decodes it) and sample their point clouds anew every step (cache
+off: the cost of a first epoch; later epochs reuse the clouds of frames already seen). "query"
+is one call of ``select_action`` right after ``reset()`` (always a model evaluation); "per env
+step" is the mean over a 100-step rollout, where chunking policies reuse queued actions and
+SARNN holds its command for ``frame_skip`` steps.
 """
 
 from __future__ import annotations
@@ -28,10 +29,11 @@ import torch
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.policies.factory import get_policy_class, make_policy_config
 
-import lerobot_env_rmb  # noqa: F401 - registers mlp, sarnn, dp3, as LeRobot's plugin discovery
+import lerobot_env_rmb  # noqa: F401 - registers our policies, as LeRobot's plugin discovery
 
 STATE_DIM = ACTION_DIM = 7  # UR5e joints + gripper
-DEPTH_POLICIES = {"dp3": {"camera_fovy": 45.0, "point_cloud_cache_size": 0}}
+POINT_CLOUD_ARGS = {"camera_fovy": 45.0, "point_cloud_cache_size": 0}
+DEPTH_POLICIES = {"dp3": POINT_CLOUD_ARGS, "flow_policy": POINT_CLOUD_ARGS}
 DEPTH_SUFFIX = "_depth"
 
 
@@ -113,7 +115,9 @@ def inference_ms(policy, queries: int, rollout: int) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
-        "--policies", nargs="+", default=["mlp", "sarnn", "dp3", "act", "diffusion"]
+        "--policies",
+        nargs="+",
+        default=["mlp", "sarnn", "dp3", "flow_policy", "act", "diffusion"],
     )
     parser.add_argument("--cameras", type=int, default=2, help="RMB's UR5e default: front, hand")
     parser.add_argument("--image-size", type=int, default=128, help="our env's default, square")

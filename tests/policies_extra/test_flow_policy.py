@@ -14,6 +14,7 @@ import torch
 from lerobot.configs.policies import PreTrainedConfig
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+from safetensors.torch import load_file
 
 from rmb_lerobot.policies_extra.dp3 import DP3Policy
 from rmb_lerobot.policies_extra.flow_policy import FlowPolicy, FlowPolicyConfig
@@ -244,7 +245,7 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
     torch.testing.assert_close(post2(loaded.select_action(pre2(obs), noise=noise)), expected)
 
 
-def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on):
+def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on, tmp_path):
     result = train_and_eval_on(
         expert_depth_dataset,
         "flow_policy",
@@ -260,3 +261,6 @@ def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_e
     assert config["type"] == "flow_policy" and config["camera_fovy"] == 45.0
     assert (config["horizon"], config["num_inference_steps"]) == (8, 1)
     assert result["eval"]["overall"]["n_episodes"] == 1
+    # lerobot-train called policy.update() after each of its 3 steps: the EMA is trained.
+    checkpoint = tmp_path / "train" / "checkpoints" / "last" / "pretrained_model"
+    assert int(load_file(checkpoint / "model.safetensors")["ema_updates"]) == 3
