@@ -293,17 +293,21 @@ def test_unknown_robots_need_consistent_keys(tmp_path, record):
 
 
 def test_env_names_match_exactly(tmp_path, record):
-    """A two-arm env whose name contains a UR5e env's is not taken for a UR5e."""
+    """A two-arm env whose name contains a UR5e env's is not taken for a UR5e: a UR5e-sized
+    episode labelled with it is refused, one with both arms' numbers opens."""
     path = record(tmp_path / "demo.hdf5")
     set_attr(path, "env", "MujocoUR5eDualCableEnv")
+    with pytest.raises(RmbFormatError, match=r"expected \(T, 14\).*MujocoUR5eDualCableEnv"):
+        open_episode(path)
     with h5py.File(path, "a") as h5:
         for key in list(h5):
-            if key.endswith(("joint_pos", "joint_vel", "joint_pos_rel")):
+            if isinstance(h5[key], h5py.Dataset) and h5[key].ndim == 2:  # per-step vectors
                 both = np.concatenate([h5[key][()], h5[key][()]], axis=1)
                 del h5[key]
                 h5.create_dataset(key, data=both)
     with open_episode(path) as ep:
         assert ep["measured_joint_pos"].shape == (12, 14)
+        assert ep["command_eef_pose"].shape == (12, 14)
 
 
 def test_millimetre_depth_in_a_single_file_is_refused(tmp_path, record):
