@@ -1,0 +1,372 @@
+"""ManiFlow on LeRobot's policy API: a DiT-X velocity field trained by consistency flow training.
+
+* Observation tokens, per observation frame: one per RGB camera (a ResNet-18 with GroupNorm,
+  global average pool, linear) or one for the point cloud (the dp3 plugin's depth -> cloud
+  pipeline and PointNet, linear), and one for the state (dp3's state MLP, linear); plus a
+  learned position embedding per token.
+* DiT-X (Yan et al. 2025, after DiT, Peebles & Xie 2023): each block runs self-attention over the
+  action tokens, cross-attention from them to the observation tokens and an MLP, each behind a
+  LayerNorm whose shift and scale, and a gate on its output, come from the condition vector
+  (AdaLN-Zero: the gates start at zero, so every block starts as the identity). The condition is
+  the sum of the flow time's sinusoidal embedding and the mean observation token.
+* Training (t = 0 noise z, t = 1 the action chunk a, x_t = t a + (1 - t) z): a share
+  ``flow_batch_ratio`` of each batch regresses the velocity v(x_t, t) on a - z with
+  t ~ Beta(alpha, beta) (flow matching); the rest is consistency training: for t and a step dt,
+  the EMA copy extrapolates from the path point x_{t+dt} to the end,
+  a' = x_{t+dt} + (1 - t - dt) v_ema(x_{t+dt}, t + dt), and v(x_t, t) regresses on the straight
+  velocity (a' - x_t) / (1 - t) = (dt (a - z) + (1 - t - dt) v_ema) / (1 - t). Velocities that
+  agree with their own later predictions make the flow straight, so few Euler steps suffice.
+* Inference: ``num_inference_steps`` Euler steps from noise with the EMA weights.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections import deque
+
+import torch
+import torch.nn.functional as F
+from lerobot.policies.pretrained import PreTrainedPolicy
+from lerobot.policies.utils import populate_queues
+from lerobot.utils.constants import ACTION, OBS_STATE
+from torch import Tensor, nn
+from torchvision.models.resnet import BasicBlock
+
+from rmb_lerobot.policies_extra.dp3.modeling_dp3 import PointNetEncoder, mlp
+from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds, resolve_camera_fovy
+from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import ema_decay, per_sample
+
+from .configuration_maniflow import ManiFlowConfig
+
+CLOUD = "cloud"  # key of the (B, T, P, C) point clouds among the model inputs
+
+
+def sinusoidal_embedding(t: Tensor, dim: int) -> Tensor:
+    """(B,) scalars -> (B, dim) sin/cos features at geometric frequencies (as DiT)."""
+    half = dim // 2
+    freqs = torch.exp(-math.log(10000.0) * torch.arange(half, device=t.device) / half)
+    angles = t.float()[:, None] * freqs[None]
+    return torch.cat([angles.sin(), angles.cos()], dim=-1)
+
+
+class ResNet18GroupNorm(nn.Module):
+    """ResNet-18 (torchvision's BasicBlock, stages of 2) with GroupNorm instead of BatchNorm:
+    (N, 3, H, W) in [0, 1] -> (N, 8 * width) after global average pooling. ``width`` 64 is
+    ResNet-18 (11.2 M parameters); GroupNorm keeps small, correlated robot batches stable."""
+
+    def __init__(self, width: int, groupnorm_channels: int):
+        super().__init__()
+
+        def norm(channels: int) -> nn.GroupNorm:
+            return nn.GroupNorm(channels // groupnorm_channels, channels)
+
+        self.stem = nn.Sequential(
+            nn.Conv2d(3, width, kernel_size=7, stride=2, padding=3, bias=False),
+            norm(width),
+            nn.ReLU(inplace=True),
+            nn.MaxPool2d(kernel_size=3, stride=2, padding=1),
+        )
+        stages, inplanes = [], width
+        for i in range(4):
+            planes, stride = width * 2**i, 1 if i == 0 else 2
+            downsample = None
+            if stride != 1 or inplanes != planes:
+                downsample = nn.Sequential(
+                    nn.Conv2d(inplanes, planes, kernel_size=1, stride=stride, bias=False),
+                    norm(planes),
+                )
+            stages += [
+                BasicBlock(inplanes, planes, stride, downsample, norm_layer=norm),
+                BasicBlock(planes, planes, norm_layer=norm),
+            ]
+            inplanes = planes
+        self.stages = nn.Sequential(*stages)
+        self.out_dim = inplanes
+
+    def forward(self, images: Tensor) -> Tensor:
+        return self.stages(self.stem(images)).mean(dim=(-2, -1))
+
+
+def modulate(x: Tensor, shift: Tensor, scale: Tensor) -> Tensor:
+    """AdaLN: (B, N, D) normalised tokens shifted and scaled by (B, D) condition terms."""
+    return x * (1 + scale[:, None]) + shift[:, None]
+
+
+class DiTXBlock(nn.Module):
+    """Self-attention, cross-attention to the observation tokens and an MLP, each AdaLN-Zero
+    modulated by the condition vector."""
+
+    def __init__(self, width: int, heads: int, mlp_ratio: float, dropout: float):
+        super().__init__()
+        self.norms = nn.ModuleList(
+            nn.LayerNorm(width, elementwise_affine=False, eps=1e-6) for _ in range(3)
+        )
+        self.self_attn = nn.MultiheadAttention(width, heads, dropout=dropout, batch_first=True)
+        self.cross_attn = nn.MultiheadAttention(width, heads, dropout=dropout, batch_first=True)
+        hidden = int(width * mlp_ratio)
+        self.mlp = nn.Sequential(
+            nn.Linear(width, hidden), nn.GELU(approximate="tanh"), nn.Dropout(dropout),
+            nn.Linear(hidden, width),
+        )  # fmt: skip
+        self.adaln = nn.Sequential(nn.SiLU(), nn.Linear(width, 9 * width))
+        nn.init.zeros_(self.adaln[-1].weight)
+        nn.init.zeros_(self.adaln[-1].bias)
+
+    def forward(self, x: Tensor, obs: Tensor, cond: Tensor) -> Tensor:
+        mods = self.adaln(cond).chunk(9, dim=-1)
+        h = modulate(self.norms[0](x), mods[0], mods[1])
+        x = x + mods[2][:, None] * self.self_attn(h, h, h, need_weights=False)[0]
+        h = modulate(self.norms[1](x), mods[3], mods[4])
+        x = x + mods[5][:, None] * self.cross_attn(h, obs, obs, need_weights=False)[0]
+        h = modulate(self.norms[2](x), mods[6], mods[7])
+        return x + mods[8][:, None] * self.mlp(h)
+
+
+class ManiFlowModel(nn.Module):
+    """Observation encoders + DiT-X: a velocity field over action chunks."""
+
+    def __init__(self, config: ManiFlowConfig):
+        super().__init__()
+        self.config = config
+        width, n_obs = config.n_emb, config.n_obs_steps
+        action_dim = config.action_feature.shape[0]
+        state_dim = config.robot_state_feature.shape[0]
+
+        self.state_encoder = nn.Sequential(
+            mlp(state_dim, tuple(config.state_mlp_dims)),
+            nn.Linear(config.state_mlp_dims[-1], width),
+        )
+        if config.obs_encoder == "image":
+            self.image_keys = config.image_keys
+            self.image_encoder = ResNet18GroupNorm(config.resnet_width, config.groupnorm_channels)
+            self.image_projection = nn.Linear(self.image_encoder.out_dim, width)
+            tokens_per_frame = len(self.image_keys) + 1
+        else:
+            self.image_keys = ()
+            self.point_encoder = nn.Sequential(
+                PointNetEncoder(
+                    config.point_dim, tuple(config.encoder_channels), config.encoder_output_dim
+                ),
+                nn.Linear(config.encoder_output_dim, width),
+            )
+            tokens_per_frame = 2
+        self.obs_pos = nn.Parameter(torch.zeros(1, n_obs * tokens_per_frame, width))
+
+        self.action_in = nn.Linear(action_dim, width)
+        self.action_pos = nn.Parameter(torch.zeros(1, config.horizon, width))
+        self.time_mlp = nn.Sequential(nn.Linear(width, width), nn.SiLU(), nn.Linear(width, width))
+        self.obs_cond = nn.Linear(width, width)
+        self.blocks = nn.ModuleList(
+            DiTXBlock(width, config.n_head, config.mlp_ratio, config.dropout)
+            for _ in range(config.n_layer)
+        )
+        self.final_norm = nn.LayerNorm(width, elementwise_affine=False, eps=1e-6)
+        self.final_adaln = nn.Sequential(nn.SiLU(), nn.Linear(width, 2 * width))
+        self.action_out = nn.Linear(width, action_dim)
+        nn.init.normal_(self.obs_pos, std=0.02)
+        nn.init.normal_(self.action_pos, std=0.02)
+        for layer in (self.final_adaln[-1], self.action_out):
+            nn.init.zeros_(layer.weight)
+            nn.init.zeros_(layer.bias)
+
+    def observation_tokens(self, obs: dict[str, Tensor]) -> Tensor:
+        """Model inputs (state (B, T, S) and images (B, T, 3, H, W) or cloud (B, T, P, C)) ->
+        (B, T * tokens_per_frame, n_emb) tokens."""
+        state = obs[OBS_STATE]
+        batch, steps = state.shape[:2]
+        per_frame = [self.state_encoder(state)]
+        if self.image_keys:
+            for key in self.image_keys:
+                images = obs[key].flatten(0, 1)
+                features = self.image_projection(self.image_encoder(images))
+                per_frame.append(features.view(batch, steps, -1))
+        else:
+            per_frame.append(self.point_encoder(obs[CLOUD]))
+        tokens = torch.stack(per_frame, dim=2).flatten(1, 2)
+        return tokens + self.obs_pos
+
+    def velocity(self, x: Tensor, t: Tensor, obs_tokens: Tensor) -> Tensor:
+        """Velocity (B, horizon, A) at action chunks ``x`` and (B,) flow times ``t``."""
+        cfg = self.config
+        cond = self.time_mlp(sinusoidal_embedding(t * cfg.time_scale, cfg.n_emb))
+        cond = cond + self.obs_cond(obs_tokens.mean(dim=1))
+        h = self.action_in(x) + self.action_pos
+        for block in self.blocks:
+            h = block(h, obs_tokens, cond)
+        shift, scale = self.final_adaln(cond).chunk(2, dim=-1)
+        return self.action_out(modulate(self.final_norm(h), shift, scale))
+
+    def compute_loss(
+        self,
+        obs: dict[str, Tensor],
+        actions: Tensor,
+        ema: ManiFlowModel | None,
+        is_pad: Tensor | None = None,
+    ) -> tuple[Tensor, dict[str, float]]:
+        """Flow-matching + consistency loss of a batch; ``ema`` gives the consistency targets
+        (the model itself, without gradient, if None)."""
+        cfg = self.config
+        batch, device = actions.shape[0], actions.device
+        n_flow = round(batch * cfg.flow_batch_ratio)
+        noise = torch.randn_like(actions)
+        straight = actions - noise  # velocity of the straight noise -> action path
+
+        t_flow = torch.distributions.Beta(cfg.flow_t_alpha, cfg.flow_t_beta).sample((n_flow,))
+        t_cons = torch.rand(batch - n_flow) * (1.0 - cfg.consistency_min_dt)
+        dt = cfg.consistency_min_dt + torch.rand(batch - n_flow) * (
+            1.0 - t_cons - cfg.consistency_min_dt
+        )
+        t = torch.cat([t_flow, t_cons]).to(device)
+        dt = dt.to(device)
+
+        tokens = self.observation_tokens(obs)
+        x_t = per_sample(t) * actions + (1.0 - per_sample(t)) * noise
+        pred = self.velocity(x_t, t, tokens)
+
+        target = straight.clone()
+        if n_flow < batch:
+            with torch.no_grad():
+                teacher = ema if ema is not None else self
+                c = slice(n_flow, batch)
+                t_next = t[c] + dt
+                x_next = x_t[c] + per_sample(dt) * straight[c]
+                v_next = teacher.velocity(x_next, t_next, teacher.observation_tokens(_rows(obs, c)))
+                remaining = per_sample(1.0 - t_next)
+                target[c] = (per_sample(dt) * straight[c] + remaining * v_next) / per_sample(
+                    1.0 - t[c]
+                )
+        loss = F.mse_loss(pred, target, reduction="none")
+        if cfg.do_mask_loss_for_padding and is_pad is not None:
+            valid = (~is_pad).unsqueeze(-1).expand_as(loss)
+            loss = loss * valid / valid.float().mean().clamp_min(1e-6)
+        per_row = loss.mean(dim=(1, 2))
+        info = {
+            "flow_loss": per_row[:n_flow].mean().item() if n_flow else 0.0,
+            "consistency_loss": per_row[n_flow:].mean().item() if n_flow < batch else 0.0,
+        }
+        return per_row.mean(), info
+
+    def generate_actions(self, obs: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
+        """Euler steps from noise to a chunk; its ``n_action_steps`` from the current frame."""
+        cfg = self.config
+        state = obs[OBS_STATE]
+        shape = (state.shape[0], cfg.horizon, cfg.action_feature.shape[0])
+        x = noise if noise is not None else torch.randn(shape, device=state.device)
+        tokens = self.observation_tokens(obs)
+        steps = cfg.num_inference_steps
+        for i in range(steps):
+            t = torch.full((shape[0],), i / steps, device=x.device)
+            x = x + self.velocity(x, t, tokens) / steps
+        start = cfg.n_obs_steps - 1
+        return x[:, start : start + cfg.n_action_steps]
+
+
+def _rows(obs: dict[str, Tensor], rows: slice) -> dict[str, Tensor]:
+    return {k: v[rows] for k, v in obs.items()}
+
+
+class ManiFlowPolicy(PreTrainedPolicy):
+    """Images or point cloud + state -> chunk of actions, ``n_action_steps`` executed.
+
+    LeRobot's factory finds it by convention: ``ManiFlowConfig`` -> ``ManiFlowPolicy`` in the
+    sibling ``modeling_`` module (so, unlike flow_policy, no alias is needed).
+    """
+
+    config_class = ManiFlowConfig
+    name = "maniflow"
+
+    def __init__(self, config: ManiFlowConfig, dataset_meta=None, **kwargs):
+        """``dataset_meta`` (from ``make_policy`` when training) supplies a depth camera's fovy."""
+        super().__init__(config)
+        config.validate_features()
+        self.config = config
+        self.point_clouds: DepthPointClouds | None = None
+        if config.obs_encoder == "pointcloud":
+            resolve_camera_fovy(config, dataset_meta)
+            self.point_clouds = DepthPointClouds(config)
+        self.model = ManiFlowModel(config)
+        shared = {id(config): config}  # one config for both copies
+        self.ema_model = copy.deepcopy(self.model, shared).requires_grad_(False)
+        self.register_buffer("ema_updates", torch.zeros((), dtype=torch.long))
+        self.reset()
+
+    @property
+    def observation_keys(self) -> tuple[str, ...]:
+        cfg = self.config
+        if cfg.obs_encoder == "image":
+            return (OBS_STATE, *cfg.image_keys)
+        keys = (OBS_STATE, cfg.depth_key, cfg.color_key)
+        return tuple(k for k in keys if k is not None)
+
+    def get_optim_params(self) -> list[nn.Parameter]:
+        return [p for p in self.parameters() if p.requires_grad]
+
+    def reset(self) -> None:
+        """Start an episode: forget the observation history and the queued actions."""
+        self._queues = {key: deque(maxlen=self.config.n_obs_steps) for key in self.observation_keys}
+        self._queues[ACTION] = deque(maxlen=self.config.n_action_steps)
+
+    def model_inputs(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
+        """Observation windows (B, T, ...) -> what the model encodes (depth becomes a cloud)."""
+        missing = [k for k in self.observation_keys if k not in batch]
+        if missing:
+            raise KeyError(
+                f"maniflow needs {missing}: RMB env types deliver depth with --env.depth=true"
+            )
+        cfg = self.config
+        if self.point_clouds is None:
+            return {k: batch[k] for k in self.observation_keys}
+        rgb = batch[cfg.color_key] if cfg.color_key is not None else None
+        return {OBS_STATE: batch[OBS_STATE], CLOUD: self.point_clouds(batch[cfg.depth_key], rgb)}
+
+    def _window_from_history(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
+        missing = [k for k in self.observation_keys if k not in batch]
+        if missing:
+            raise KeyError(f"maniflow needs {missing}")
+        self._queues = populate_queues(self._queues, {k: batch[k] for k in self.observation_keys})
+        return {k: torch.stack(list(self._queues[k]), dim=1) for k in self.observation_keys}
+
+    @torch.no_grad()
+    def predict_action_chunk(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
+        """(B, n_action_steps, A) actions from the current step on, from the EMA weights.
+
+        ``batch`` is one observation (B, ...), appended to the history kept since :meth:`reset`,
+        or a window (B, n_obs_steps, ...) as the dataset gives.
+        """
+        self.eval()
+        if batch[OBS_STATE].ndim == 2:
+            batch = self._window_from_history(batch)
+        return self.ema_model.generate_actions(self.model_inputs(batch), noise=noise)
+
+    @torch.no_grad()
+    def select_action(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
+        """Next action (B, A): a new chunk every ``n_action_steps`` calls, queued in between."""
+        window = self._window_from_history(batch)
+        if not self._queues[ACTION]:
+            self.eval()
+            chunk = self.ema_model.generate_actions(self.model_inputs(window), noise=noise)
+            self._queues[ACTION].extend(chunk.transpose(0, 1))
+        return self._queues[ACTION].popleft()
+
+    def forward(self, batch: dict[str, Tensor]) -> tuple[Tensor, dict]:
+        """Loss of a batch of windows: observations (B, n_obs_steps, ...), ``action``
+        (B, horizon, A) and ``action_is_pad`` (B, horizon)."""
+        if batch[OBS_STATE].ndim == 2:  # n_obs_steps == 1 without a time axis
+            batch = {**batch, **{k: batch[k].unsqueeze(1) for k in self.observation_keys}}
+        return self.model.compute_loss(
+            self.model_inputs(batch), batch[ACTION], self.ema_model, batch.get(f"{ACTION}_is_pad")
+        )
+
+    @torch.no_grad()
+    def update(self) -> None:
+        """Move the EMA weights towards the trained ones (LeRobot's train loop calls this after
+        each optimizer step)."""
+        self.ema_updates += 1
+        decay = ema_decay(int(self.ema_updates), self.config.ema_power, self.config.ema_max_decay)
+        for average, current in zip(
+            self.ema_model.parameters(), self.model.parameters(), strict=True
+        ):
+            average.lerp_(current, 1.0 - decay)
+        for average, current in zip(self.ema_model.buffers(), self.model.buffers(), strict=True):
+            average.copy_(current)
