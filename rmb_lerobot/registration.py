@@ -19,6 +19,7 @@ POLICY_CONFIG_MODULES: tuple[str, ...] = (
     "rmb_lerobot.policies_extra.sarnn.configuration_sarnn",
     "rmb_lerobot.policies_extra.dp3.configuration_dp3",
     "rmb_lerobot.policies_extra.flow_policy.configuration_flow_policy",
+    "rmb_lerobot.policies_extra.mt_act.configuration_mt_act",
     "rmb_lerobot.policies_extra.maniflow.configuration_maniflow",
 )
 

@@ -1,0 +1,205 @@
+"""MT-ACT as a LeRobot plugin: LeRobot's ACT conditioned on the task sentence.
+
+ACT itself is LeRobot's and tested there; here: registration, the text conditioning (FiLM and
+the extra encoder token), the per-string embedding cache, persistence and the CLIs on Pick,
+whose episodes each carry one of 18 instructions.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import torch
+from lerobot.configs.policies import PreTrainedConfig
+from lerobot.policies.act.modeling_act import ACTPolicy
+from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+
+from rmb_lerobot.policies_extra.mt_act import MTACTConfig, MTACTPolicy
+from rmb_lerobot.policies_extra.mt_act.modeling_mt_act import FiLMStage, TextTokenEncoder
+from rmb_lerobot.policies_extra.mt_act.text_encoder import hashed_embedding
+from rmb_lerobot.registration import registered_policy_types
+
+ACTION_DIM = 7  # the conftest features: UR5e-sized state and action, one front camera
+FRONT = "observation.images.front"
+CHUNK = 4
+TINY = {
+    "dim_model": 32,
+    "n_heads": 2,
+    "dim_feedforward": 64,
+    "n_encoder_layers": 1,
+    "n_decoder_layers": 1,
+    "n_vae_encoder_layers": 1,
+    "latent_dim": 8,
+    "chunk_size": CHUNK,
+    "n_action_steps": CHUNK,
+    "dropout": 0.0,
+    "device": "cpu",
+}
+RED = "Put the red ball in the blue basket."
+GREEN = "Put the green cube in the red basket."
+
+
+def make_mt_act(features, **overrides) -> MTACTPolicy:
+    inputs, outputs = features
+    torch.manual_seed(0)
+    config = MTACTConfig(input_features=inputs, output_features=outputs, **TINY | overrides)
+    return MTACTPolicy(config)
+
+
+def test_mt_act_is_our_policy_type_and_found_by_lerobots_convention():
+    assert "mt_act" in registered_policy_types()
+    assert PreTrainedConfig.get_choice_class("mt_act") is MTACTConfig
+    assert get_policy_class("mt_act") is MTACTPolicy
+    assert issubclass(MTACTPolicy, ACTPolicy)  # ACT's network, losses and action queue
+
+
+def test_config_defaults_are_rmbs_and_offline():
+    config = MTACTConfig()
+    # RMB TrainMtAct: chunk 20, width 512, feed-forward 3200, 4 encoder / 7 decoder layers.
+    assert (config.chunk_size, config.n_action_steps, config.n_decoder_layers) == (20, 20, 7)
+    assert (config.dim_model, config.dim_feedforward, config.n_encoder_layers) == (512, 3200, 4)
+    assert config.kl_weight == 10.0
+    assert config.optimizer_lr == config.optimizer_lr_backbone == 1e-5
+    # No downloads by default: random ResNet, the hashed stand-in for all-MiniLM-L6-v2 (384-d).
+    assert config.pretrained_backbone_weights is None
+    assert (config.text_encoder, config.text_embedding_dim) == ("hashed", 384)
+    with pytest.raises(ValueError, match="text_encoder"):
+        MTACTConfig(text_encoder="clip")
+
+
+def test_hashed_embedding_is_a_deterministic_unit_vector_sharing_words():
+    red, green = hashed_embedding(RED, 384), hashed_embedding(GREEN, 384)
+    assert red.shape == (384,) and red.norm() == pytest.approx(1.0)
+    torch.testing.assert_close(hashed_embedding(RED.upper() + "  ", 384), red)  # case, spaces
+    blue_basket = hashed_embedding("Put the red ball in the green basket.", 384)
+    assert 0.3 < float(red @ green) < float(red @ blue_basket) < 1.0  # shared words overlap
+
+
+def test_shapes_and_a_training_step(features, observation):
+    policy = make_mt_act(features)
+    stages = [getattr(policy.model.backbone, f"layer{i}") for i in (1, 2, 3)]
+    assert all(isinstance(stage, FiLMStage) for stage in stages)
+    assert not isinstance(policy.model.backbone.layer4, FiLMStage)
+    assert isinstance(policy.model.encoder, TextTokenEncoder)
+
+    batch = observation(2) | {
+        "action": torch.randn(2, CHUNK, ACTION_DIM),
+        "action_is_pad": torch.zeros(2, CHUNK, dtype=torch.bool),
+        "task": [RED, GREEN],  # as a LeRobotDataset batch: one string per sample
+    }
+    policy.train()
+    loss, info = policy.forward(batch)
+    assert torch.isfinite(loss) and {"l1_loss", "kld_loss"} <= set(info)
+    loss.backward()
+    film, token = stages[0].film.weight, policy.model.encoder.text_input_proj.weight
+    assert film.grad.abs().sum() > 0 and token.grad.abs().sum() > 0  # the text is used
+    torch.optim.AdamW(policy.parameters(), lr=1e-3).step()
+    assert policy.predict_action_chunk(batch).shape == (2, CHUNK, ACTION_DIM)
+
+    with pytest.raises(KeyError, match="task"):
+        policy.predict_action_chunk(observation(1))
+
+
+def test_the_task_string_conditions_the_actions_and_embeddings_are_cached(features, observation):
+    policy = make_mt_act(features)
+    obs = observation(1)
+
+    def chunk(task) -> torch.Tensor:
+        return policy.predict_action_chunk(obs | {"task": task})
+
+    red = chunk(RED)
+    assert not torch.allclose(chunk(GREEN), red, atol=1e-5)  # same observation, other task
+    torch.testing.assert_close(chunk([RED]), red)  # one string or a list of one
+    assert set(policy.text_encoder.cache) == {RED, GREEN}  # each string embedded once
+    torch.testing.assert_close(chunk(RED + "\n"), red)  # as some pipelines pass it
+
+    # A batch of two observations with two tasks: each row follows its own task.
+    both = policy.predict_action_chunk(observation(2) | {"task": [RED, GREEN]})
+    alone = policy.predict_action_chunk(observation(2) | {"task": [GREEN, GREEN]})
+    torch.testing.assert_close(both[1], alone[1])
+    assert not torch.allclose(both[0], alone[0], atol=1e-5)
+
+
+def test_save_load_round_trip_gives_identical_actions(features, observation, tmp_path):
+    policy = make_mt_act(features)
+    with torch.no_grad():  # FiLM starts as the identity; make it matter for the round trip
+        for i in (1, 2, 3):
+            getattr(policy.model.backbone, f"layer{i}").film.weight.normal_(0, 0.1)
+    stats = {
+        "observation.state": {"mean": torch.zeros(7), "std": torch.ones(7)},
+        FRONT: {"mean": torch.full((3, 1, 1), 0.5), "std": torch.full((3, 1, 1), 0.2)},
+        "action": {"mean": torch.ones(ACTION_DIM), "std": torch.full((ACTION_DIM,), 2.0)},
+    }
+    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
+    for part in (policy, pre, post):
+        part.save_pretrained(tmp_path)
+
+    config = PreTrainedConfig.from_pretrained(tmp_path)
+    assert config.type == "mt_act" and config.text_encoder == "hashed"
+    loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+    pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
+
+    # As lerobot-eval: one observation and the env's task description per step.
+    obs = observation(1) | {"task": [RED]}
+    policy.reset()
+    loaded.reset()
+    expected = post(policy.select_action(pre(obs)))
+    torch.testing.assert_close(post2(loaded.select_action(pre2(obs))), expected)
+
+
+def test_lerobot_train_then_eval_on_pick_with_two_instructions(
+    make_expert_dataset, lerobot_cli, tmp_path
+):
+    from lerobot.datasets import LeRobotDatasetMetadata
+
+    dataset = make_expert_dataset("pick", tmp_path / "pick", world_idx=(0, 1), size=32)
+    tasks = LeRobotDatasetMetadata("local/pick", root=dataset).tasks.index
+    assert len(set(tasks)) == 2 and all(task.startswith("Put the") for task in tasks)
+
+    out = tmp_path / "train"
+    tiny = [f"--policy.{k}={v}" for k, v in TINY.items() if k != "device"]
+    train = lerobot_cli(
+        "lerobot_train",
+        [
+            "--policy.type=mt_act",
+            *tiny,
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            "--dataset.repo_id=local/pick",
+            f"--dataset.root={dataset}",
+            f"--output_dir={out}",
+            "--steps=2",
+            "--batch_size=2",
+            "--num_workers=0",
+            "--save_freq=2",
+            "--log_freq=1",
+            "--wandb.enable=false",
+        ],
+        tmp_path,
+    )
+    assert train.returncode == 0, train.stderr[-3000:]
+    checkpoint = out / "checkpoints" / "last" / "pretrained_model"
+    # lerobot-eval passes the env's task_description (Pick: the episode's instruction) as
+    # batch["task"]; without it the policy would raise.
+    evaluation = lerobot_cli(
+        "lerobot_eval",
+        [
+            f"--policy.path={checkpoint}",
+            "--policy.device=cpu",
+            "--env.type=rmb_ur5e_pick",
+            "--env.cameras=[front]",
+            "--env.image_width=32",
+            "--env.image_height=32",
+            "--env.episode_length=5",
+            "--eval.n_episodes=1",
+            "--eval.batch_size=1",
+            f"--output_dir={tmp_path / 'eval'}",
+        ],
+        tmp_path,
+    )
+    assert evaluation.returncode == 0, evaluation.stderr[-3000:]
+    config = json.loads((checkpoint / "config.json").read_text())
+    assert (config["type"], config["text_encoder"], config["chunk_size"]) == ("mt_act", "hashed", 4)
+    info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
+    assert info["overall"]["n_episodes"] == 1
