@@ -3,18 +3,18 @@
 Yan et al., "ManiFlow: A General Robot Manipulation Policy via Consistency Flow Training",
 CoRL 2025. A DiT-X transformer turns a chunk of noisy actions into a velocity: its action tokens
 self-attend, cross-attend to observation tokens and are modulated by AdaLN from the flow time
-and the pooled observation. The observation tokens come from RGB cameras (a
+(and the step size) and the pooled observation. The observation tokens come from RGB cameras (a
 ResNet-18 with GroupNorm, trained from scratch) or from one depth camera's point cloud (the dp3
 plugin's pipeline and PointNet), plus the state. Training mixes flow matching with consistency
 training against an EMA copy; inference takes a few Euler steps.
 
 Defaults are the paper's (DESIGN 7.5): 12 layers, 8 heads, 768 wide, horizon 16, 2 observation
 steps, 75 % flow matching with t ~ Beta(1, 1.5), 25 % consistency, 10 Euler steps. That network
-has 191.8 M trained parameters with the image encoder (one camera, 7-D state/action; 11.2 M of
-them the ResNet-18; AdaLN's 9 x 768 x 768 per block is the largest part) and 180.3 M with the
+has 192.3 M trained parameters with the image encoder (one camera, 7-D state/action; 11.2 M of
+them the ResNet-18; AdaLN's 9 x 768 x 768 per block is the largest part) and 180.9 M with the
 point-cloud encoder; the EMA copy doubles what is stored. For a CPU pass :data:`CPU_SIZE` as
 flags, ``--policy.n_layer=2 --policy.n_head=4 --policy.n_emb=64 --policy.resnet_width=16``:
-0.95 M trained parameters with the image encoder (0.70 M ResNet), 0.30 M with the point cloud.
+0.95 M trained parameters with the image encoder (0.70 M ResNet), 0.31 M with the point cloud.
 
 The point-cloud fields (``camera``, ``camera_fovy``, ``num_points``, crop ...) are inherited
 from the dp3 plugin's :class:`PointCloudUnetConfig`, as are the optimizer and the observation /
@@ -56,9 +56,13 @@ class ManiFlowConfig(PointCloudUnetConfig):
             consistency training.
         flow_t_alpha / flow_t_beta: Flow-matching times t ~ Beta(alpha, beta); t = 0 is noise,
             t = 1 the actions.
-        consistency_min_dt: Smallest step size drawn for consistency training.
+        consistency_time_steps: Consistency training draws t from {0, 1/n, ..., (n-1)/n}
+            (the authors' ``denoise_timesteps``, 10).
         num_inference_steps: Euler steps from noise to actions.
-        time_scale: The sinusoidal time / step embeddings see ``t * time_scale``.
+        time_scale: The sinusoidal time / step embeddings see ``t * time_scale`` (DiT's
+            range of diffusion steps; ours, the authors embed t in [0, 1]).
+        optimizer_*: The authors' AdamW (lr 1e-4, betas (0.9, 0.95), weight decay 1e-3), cosine
+            schedule with 500 warm-up steps.
         ema_power / ema_max_decay: The EMA copy (consistency targets and inference) is updated
             after each optimizer step (``policy.update()``), decay 1 - (1 + k) ** -power capped.
     """
@@ -76,12 +80,15 @@ class ManiFlowConfig(PointCloudUnetConfig):
     flow_batch_ratio: float = 0.75
     flow_t_alpha: float = 1.0
     flow_t_beta: float = 1.5
-    consistency_min_dt: float = 1e-2
+    consistency_time_steps: int = 10
     num_inference_steps: int = 10
     time_scale: float = 1000.0
 
     ema_power: float = 0.75
     ema_max_decay: float = 0.9999
+
+    optimizer_betas: tuple[float, float] = (0.9, 0.95)
+    optimizer_weight_decay: float = 1e-3
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -101,8 +108,10 @@ class ManiFlowConfig(PointCloudUnetConfig):
                 f"resnet_width ({self.resnet_width}) must be a multiple of groupnorm_channels "
                 f"({self.groupnorm_channels})"
             )
-        if not 0.0 < self.consistency_min_dt < 1.0:
-            raise ValueError(f"consistency_min_dt must be in (0, 1), got {self.consistency_min_dt}")
+        if self.consistency_time_steps < 1:
+            raise ValueError(
+                f"consistency_time_steps must be >= 1, got {self.consistency_time_steps}"
+            )
         if not 0.0 <= self.ema_max_decay < 1.0:
             raise ValueError(f"ema_max_decay must be in [0, 1), got {self.ema_max_decay}")
 

@@ -8,15 +8,19 @@
   action tokens, cross-attention from them to the observation tokens and an MLP, each behind a
   LayerNorm whose shift and scale, and a gate on its output, come from the condition vector
   (AdaLN-Zero: the gates start at zero, so every block starts as the identity). The condition is
-  the sum of the flow time's sinusoidal embedding and the mean observation token.
-* Training (t = 0 noise z, t = 1 the action chunk a, x_t = t a + (1 - t) z): a share
-  ``flow_batch_ratio`` of each batch regresses the velocity v(x_t, t) on a - z with
-  t ~ Beta(alpha, beta) (flow matching); the rest is consistency training: for t and a step dt,
-  the EMA copy extrapolates from the path point x_{t+dt} to the end,
-  a' = x_{t+dt} + (1 - t - dt) v_ema(x_{t+dt}, t + dt), and v(x_t, t) regresses on the straight
-  velocity (a' - x_t) / (1 - t) = (dt (a - z) + (1 - t - dt) v_ema) / (1 - t). Velocities that
-  agree with their own later predictions make the flow straight, so few Euler steps suffice.
-* Inference: ``num_inference_steps`` Euler steps from noise with the EMA weights.
+  an embedding of the flow time t and of the step size dt the velocity is meant for (as the
+  authors' DiT-X), plus a projection of the mean observation token.
+* Training (t = 0 noise z, t = 1 the action chunk a, x_t = t a + (1 - t) z), as the authors'
+  ``compute_loss``: the first ``flow_batch_ratio`` of each batch regresses v(x_t, t, dt = 0) on
+  a - z with t ~ Beta(alpha, beta) (flow matching); the rest is consistency training with
+  t = k / ``consistency_time_steps`` (k uniform), dt ~ U(0, 1) and s = min(t + dt, 1): the EMA
+  copy's transformer (on the trained encoders' observation tokens) extrapolates from the path
+  point x_s to the end, a' = x_s + (1 - s) v_ema(x_s, s, dt), and v(x_t, t, dt) regresses on
+  (a' - x_t) / (1 - t). Velocities that agree with their own later predictions make the flow
+  straight, so few Euler steps suffice. The loss is the flow part's mean plus the consistency
+  part's mean.
+* Inference: ``num_inference_steps`` Euler steps of size dt = 1 / steps from noise, with the
+  EMA weights.
 """
 
 from __future__ import annotations
@@ -155,7 +159,9 @@ class ManiFlowModel(nn.Module):
 
         self.action_in = nn.Linear(action_dim, width)
         self.action_pos = nn.Parameter(torch.zeros(1, config.horizon, width))
-        self.time_mlp = nn.Sequential(nn.Linear(width, width), nn.SiLU(), nn.Linear(width, width))
+        self.time_mlp = nn.Sequential(  # (t, dt) sinusoidal embeddings -> condition
+            nn.Linear(2 * width, width), nn.SiLU(), nn.Linear(width, width)
+        )
         self.obs_cond = nn.Linear(width, width)
         self.blocks = nn.ModuleList(
             DiTXBlock(width, config.n_head, config.mlp_ratio, config.dropout)
@@ -186,10 +192,12 @@ class ManiFlowModel(nn.Module):
         tokens = torch.stack(per_frame, dim=2).flatten(1, 2)
         return tokens + self.obs_pos
 
-    def velocity(self, x: Tensor, t: Tensor, obs_tokens: Tensor) -> Tensor:
-        """Velocity (B, horizon, A) at action chunks ``x`` and (B,) flow times ``t``."""
+    def velocity(self, x: Tensor, t: Tensor, dt: Tensor, obs_tokens: Tensor) -> Tensor:
+        """Velocity (B, horizon, A) at action chunks ``x``, (B,) flow times ``t``, for steps of
+        (B,) sizes ``dt`` (0: the instantaneous velocity)."""
         cfg = self.config
-        cond = self.time_mlp(sinusoidal_embedding(t * cfg.time_scale, cfg.n_emb))
+        times = [sinusoidal_embedding(v * cfg.time_scale, cfg.n_emb) for v in (t, dt)]
+        cond = self.time_mlp(torch.cat(times, dim=-1))
         cond = cond + self.obs_cond(obs_tokens.mean(dim=1))
         h = self.action_in(x) + self.action_pos
         for block in self.blocks:
@@ -208,44 +216,41 @@ class ManiFlowModel(nn.Module):
         (the model itself, without gradient, if None)."""
         cfg = self.config
         batch, device = actions.shape[0], actions.device
-        n_flow = round(batch * cfg.flow_batch_ratio)
+        n_flow = int(batch * cfg.flow_batch_ratio)
+        n_cons = batch - n_flow
         noise = torch.randn_like(actions)
         straight = actions - noise  # velocity of the straight noise -> action path
 
         t_flow = torch.distributions.Beta(cfg.flow_t_alpha, cfg.flow_t_beta).sample((n_flow,))
-        t_cons = torch.rand(batch - n_flow) * (1.0 - cfg.consistency_min_dt)
-        dt = cfg.consistency_min_dt + torch.rand(batch - n_flow) * (
-            1.0 - t_cons - cfg.consistency_min_dt
-        )
+        steps = cfg.consistency_time_steps
+        t_cons = torch.randint(0, steps, (n_cons,)).float() / steps
+        dt_cons = torch.rand(n_cons)
         t = torch.cat([t_flow, t_cons]).to(device)
-        dt = dt.to(device)
+        dt = torch.cat([torch.zeros(n_flow), dt_cons]).to(device)
 
         tokens = self.observation_tokens(obs)
         x_t = per_sample(t) * actions + (1.0 - per_sample(t)) * noise
-        pred = self.velocity(x_t, t, tokens)
+        pred = self.velocity(x_t, t, dt, tokens)
 
         target = straight.clone()
-        if n_flow < batch:
+        if n_cons:
             with torch.no_grad():
                 teacher = ema if ema is not None else self
                 c = slice(n_flow, batch)
-                t_next = t[c] + dt
-                x_next = x_t[c] + per_sample(dt) * straight[c]
-                v_next = teacher.velocity(x_next, t_next, teacher.observation_tokens(_rows(obs, c)))
-                remaining = per_sample(1.0 - t_next)
-                target[c] = (per_sample(dt) * straight[c] + remaining * v_next) / per_sample(
-                    1.0 - t[c]
-                )
+                s = (t[c] + dt[c]).clamp(max=1.0)
+                x_s = per_sample(s) * actions[c] + (1.0 - per_sample(s)) * noise[c]
+                v_s = teacher.velocity(x_s, s, dt[c], tokens[c].detach())
+                end = x_s + per_sample(1.0 - s) * v_s
+                target[c] = (end - x_t[c]) / per_sample(1.0 - t[c])
         loss = F.mse_loss(pred, target, reduction="none")
         if cfg.do_mask_loss_for_padding and is_pad is not None:
             valid = (~is_pad).unsqueeze(-1).expand_as(loss)
             loss = loss * valid / valid.float().mean().clamp_min(1e-6)
         per_row = loss.mean(dim=(1, 2))
-        info = {
-            "flow_loss": per_row[:n_flow].mean().item() if n_flow else 0.0,
-            "consistency_loss": per_row[n_flow:].mean().item() if n_flow < batch else 0.0,
-        }
-        return per_row.mean(), info
+        flow = per_row[:n_flow].mean() if n_flow else per_row.new_zeros(())
+        consistency = per_row[n_flow:].mean() if n_cons else per_row.new_zeros(())
+        info = {"flow_loss": flow.item(), "consistency_loss": consistency.item()}
+        return flow + consistency, info
 
     def generate_actions(self, obs: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
         """Euler steps from noise to a chunk; its ``n_action_steps`` from the current frame."""
@@ -255,9 +260,10 @@ class ManiFlowModel(nn.Module):
         x = noise if noise is not None else torch.randn(shape, device=state.device)
         tokens = self.observation_tokens(obs)
         steps = cfg.num_inference_steps
+        dt = torch.full((shape[0],), 1.0 / steps, device=x.device)
         for i in range(steps):
             t = torch.full((shape[0],), i / steps, device=x.device)
-            x = x + self.velocity(x, t, tokens) / steps
+            x = x + self.velocity(x, t, dt, tokens) / steps
         start = cfg.n_obs_steps - 1
         return x[:, start : start + cfg.n_action_steps]
 

@@ -90,7 +90,8 @@ def test_config_defaults_are_the_papers(features):
     assert (config.n_layer, config.n_head, config.n_emb) == (12, 8, 768)  # DiT-X
     assert (config.horizon, config.n_obs_steps, config.resnet_width) == (16, 2, 64)
     assert (config.flow_batch_ratio, config.flow_t_alpha, config.flow_t_beta) == (0.75, 1.0, 1.5)
-    assert (config.num_inference_steps, config.obs_encoder) == (10, "image")
+    assert (config.num_inference_steps, config.consistency_time_steps) == (10, 10)
+    assert config.obs_encoder == "image" and config.optimizer_betas == (0.9, 0.95)
     with pytest.raises(ValueError, match="obs_encoder"):
         ManiFlowConfig(obs_encoder="voxels")
     with pytest.raises(ValueError, match="multiple of n_head"):
@@ -109,7 +110,7 @@ def test_config_defaults_are_the_papers(features):
 def test_the_cpu_size_is_small_and_the_ema_is_a_frozen_copy(features):
     policy = make_maniflow(features, **CPU_SIZE)
     trained = sum(p.numel() for p in policy.model.parameters())
-    assert 0.5e6 < trained < 1.5e6  # 0.95 M with one camera (the paper's size: 191.8 M)
+    assert 0.5e6 < trained < 1.5e6  # 0.95 M with one camera (the paper's size: 192.3 M)
     assert sum(p.numel() for p in policy.get_optim_params()) == trained
     assert not any(p.requires_grad for p in policy.ema_model.parameters())
     assert any(isinstance(m, torch.nn.GroupNorm) for m in policy.model.image_encoder.modules())
@@ -136,6 +137,32 @@ def test_shapes_and_a_training_step(features, obs_encoder):
     policy.update()  # what lerobot-train calls after each optimizer step; the first copies
     assert torch.equal(ema, current) and int(policy.ema_updates) == 1
     assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
+
+
+def test_the_straight_flow_to_the_actions_has_zero_loss(features):
+    """Both objectives are minimal (zero) for the velocity field that runs straight from any
+    point to the batch's actions: the flow target a - z and the consistency target (the EMA's
+    extrapolated end, from the current point) both equal (a - x_t) / (1 - t)."""
+    policy = make_maniflow(features)
+    batch = windows(policy, 8)
+    actions = batch["action"]
+
+    def straight(scale: float):
+        def velocity(x, t, dt, tokens):
+            # The teacher sees the batch's last (consistency) rows, the student all of them.
+            target = actions[-len(x) :]
+            return scale * (target - x) / (1 - t).clamp_min(1e-6).view(-1, 1, 1)
+
+        return velocity
+
+    def loss_with(scale: float) -> float:
+        policy.ema_model.velocity = straight(1.0)
+        policy.model.velocity = straight(scale)
+        torch.manual_seed(0)
+        return policy.forward(batch)[0].item()
+
+    assert loss_with(1.0) < 1e-10
+    assert loss_with(1.2) > 1e-4
 
 
 def test_loss_and_few_step_error_decrease_on_a_tiny_batch(features):
