@@ -10,11 +10,12 @@ training against an EMA copy; inference takes a few Euler steps.
 
 Defaults are the paper's (DESIGN 7.5): 12 layers, 8 heads, 768 wide, horizon 16, 2 observation
 steps, 75 % flow matching with t ~ Beta(1, 1.5), 25 % consistency, 10 Euler steps. That network
-has 192.3 M trained parameters with the image encoder (one camera, 7-D state/action; 11.2 M of
-them the ResNet-18; AdaLN's 9 x 768 x 768 per block is the largest part) and 180.9 M with the
-point-cloud encoder; the EMA copy doubles what is stored. For a CPU pass :data:`CPU_SIZE` as
-flags, ``--policy.n_layer=2 --policy.n_head=4 --policy.n_emb=64 --policy.resnet_width=16``:
-0.95 M trained parameters with the image encoder (0.70 M ResNet), 0.31 M with the point cloud.
+has 192.3 M trained parameters with the image encoder (one 32 x 32 camera, 7-D state/action;
+11.2 M of them the ResNet-18; AdaLN's 9 x 768 x 768 per block is the largest part) and 180.9 M
+with the point-cloud encoder; the EMA copy doubles what is stored. For a CPU pass
+:data:`CPU_SIZE` as flags, ``--policy.n_layer=2 --policy.n_head=4 --policy.n_emb=64
+--policy.resnet_width=16``: 0.95 M trained parameters with the image encoder (0.70 M ResNet),
+0.31 M with the point cloud.
 
 The point-cloud fields (``camera``, ``camera_fovy``, ``num_points``, crop ...) are inherited
 from the dp3 plugin's :class:`PointCloudUnetConfig`, as are the optimizer and the observation /
@@ -50,6 +51,9 @@ class ManiFlowConfig(PointCloudUnetConfig):
         dropout: Dropout in attention and MLPs.
         resnet_width: Channels of the ResNet's first stage (64: ResNet-18; smaller for CPUs,
             the stages double it as in ResNet-18).
+        pool_image_features: One token per camera and frame (the ResNet's average-pooled
+            features) instead of one per cell of its last feature map (stride 32, e.g. 2 x 2 for
+            64 x 64 images; the authors' setting, ``global_pool: ''``).
         groupnorm_channels: Channels per GroupNorm group replacing ResNet's BatchNorm (16 as
             Diffusion Policy's ``replace_bn_with_gn``).
         flow_batch_ratio: Share of each batch trained by flow matching; the rest by
@@ -75,6 +79,7 @@ class ManiFlowConfig(PointCloudUnetConfig):
     mlp_ratio: float = 4.0
     dropout: float = 0.0
     resnet_width: int = 64
+    pool_image_features: bool = False
     groupnorm_channels: int = 16
 
     flow_batch_ratio: float = 0.75

@@ -1,9 +1,10 @@
 """ManiFlow on LeRobot's policy API: a DiT-X velocity field trained by consistency flow training.
 
-* Observation tokens, per observation frame: one per RGB camera (a ResNet-18 with GroupNorm,
-  global average pool, linear) or one for the point cloud (the dp3 plugin's depth -> cloud
-  pipeline and PointNet, linear), and one for the state (dp3's state MLP, linear); plus a
-  learned position embedding per token.
+* Observation tokens, per observation frame: per RGB camera one per cell of the last feature
+  map of a ResNet-18 with GroupNorm (stride 32; as the authors' encoder without global pooling),
+  or one averaged over them (``pool_image_features``), then linear; or one for the point cloud
+  (the dp3 plugin's depth -> cloud pipeline and PointNet, linear); and one for the state (dp3's
+  state MLP, linear); plus a learned position embedding per token.
 * DiT-X (Yan et al. 2025, after DiT, Peebles & Xie 2023): each block runs self-attention over the
   action tokens, cross-attention from them to the observation tokens and an MLP, each behind a
   LayerNorm whose shift and scale, and a gate on its output, come from the condition vector
@@ -56,11 +57,15 @@ def sinusoidal_embedding(t: Tensor, dim: int) -> Tensor:
 
 class ResNet18GroupNorm(nn.Module):
     """ResNet-18 (torchvision's BasicBlock, stages of 2) with GroupNorm instead of BatchNorm:
-    (N, 3, H, W) in [0, 1] -> (N, 8 * width) after global average pooling. ``width`` 64 is
-    ResNet-18 (11.2 M parameters); GroupNorm keeps small, correlated robot batches stable."""
+    (N, 3, H, W) in [0, 1] -> (N, h * w, 8 * width) features of the last stage's h x w cells
+    (stride 32), or (N, 1, 8 * width) averaged over them (``pool``). ``width`` 64 is ResNet-18
+    (11.2 M parameters); GroupNorm keeps small, correlated robot batches stable."""
 
-    def __init__(self, width: int, groupnorm_channels: int):
+    STRIDED_LAYERS = 5  # stem conv, max-pool and the first conv of stages 2-4 halve the size
+
+    def __init__(self, width: int, groupnorm_channels: int, pool: bool = False):
         super().__init__()
+        self.pool = pool
 
         def norm(channels: int) -> nn.GroupNorm:
             return nn.GroupNorm(channels // groupnorm_channels, channels)
@@ -88,8 +93,18 @@ class ResNet18GroupNorm(nn.Module):
         self.stages = nn.Sequential(*stages)
         self.out_dim = inplanes
 
+    def num_tokens(self, height: int, width: int) -> int:
+        """Feature cells of an image: each strided layer (kernel 2p + 1, padding p) maps a size
+        n to (n - 1) // 2 + 1."""
+        if self.pool:
+            return 1
+        for _ in range(self.STRIDED_LAYERS):
+            height, width = (height - 1) // 2 + 1, (width - 1) // 2 + 1
+        return height * width
+
     def forward(self, images: Tensor) -> Tensor:
-        return self.stages(self.stem(images)).mean(dim=(-2, -1))
+        features = self.stages(self.stem(images)).flatten(start_dim=2).transpose(1, 2)
+        return features.mean(dim=1, keepdim=True) if self.pool else features
 
 
 def modulate(x: Tensor, shift: Tensor, scale: Tensor) -> Tensor:
@@ -143,9 +158,14 @@ class ManiFlowModel(nn.Module):
         )
         if config.obs_encoder == "image":
             self.image_keys = config.image_keys
-            self.image_encoder = ResNet18GroupNorm(config.resnet_width, config.groupnorm_channels)
+            self.image_encoder = ResNet18GroupNorm(
+                config.resnet_width, config.groupnorm_channels, pool=config.pool_image_features
+            )
             self.image_projection = nn.Linear(self.image_encoder.out_dim, width)
-            tokens_per_frame = len(self.image_keys) + 1
+            tokens_per_frame = 1 + sum(
+                self.image_encoder.num_tokens(*config.input_features[key].shape[1:])
+                for key in self.image_keys
+            )
         else:
             self.image_keys = ()
             self.point_encoder = nn.Sequential(
@@ -178,18 +198,23 @@ class ManiFlowModel(nn.Module):
 
     def observation_tokens(self, obs: dict[str, Tensor]) -> Tensor:
         """Model inputs (state (B, T, S) and images (B, T, 3, H, W) or cloud (B, T, P, C)) ->
-        (B, T * tokens_per_frame, n_emb) tokens."""
+        (B, T * tokens_per_frame, n_emb) tokens: per frame the state's, then each camera's
+        feature cells (or the cloud's)."""
         state = obs[OBS_STATE]
         batch, steps = state.shape[:2]
-        per_frame = [self.state_encoder(state)]
+        per_frame = [self.state_encoder(state).unsqueeze(2)]
         if self.image_keys:
             for key in self.image_keys:
-                images = obs[key].flatten(0, 1)
-                features = self.image_projection(self.image_encoder(images))
-                per_frame.append(features.view(batch, steps, -1))
+                features = self.image_projection(self.image_encoder(obs[key].flatten(0, 1)))
+                per_frame.append(features.view(batch, steps, *features.shape[1:]))
         else:
-            per_frame.append(self.point_encoder(obs[CLOUD]))
-        tokens = torch.stack(per_frame, dim=2).flatten(1, 2)
+            per_frame.append(self.point_encoder(obs[CLOUD]).unsqueeze(2))
+        tokens = torch.cat(per_frame, dim=2).flatten(1, 2)
+        if tokens.shape[1] != self.obs_pos.shape[1]:
+            raise ValueError(
+                f"{tokens.shape[1]} observation tokens, the model was built for "
+                f"{self.obs_pos.shape[1]}: images must have the sizes of the input features"
+            )
         return tokens + self.obs_pos
 
     def velocity(self, x: Tensor, t: Tensor, dt: Tensor, obs_tokens: Tensor) -> Tensor:

@@ -117,6 +117,20 @@ def test_the_cpu_size_is_small_and_the_ema_is_a_frozen_copy(features):
     assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in policy.modules())
 
 
+def test_image_tokens_are_the_resnets_feature_cells(features):
+    """Stride 32: a 64 x 96 camera gives 2 x 3 tokens per frame, or 1 when pooled."""
+    inputs, outputs = features
+    inputs = {**inputs, FRONT: PolicyFeature(FeatureType.VISUAL, (3, 64, 96))}
+    obs = {"observation.state": torch.zeros(2, 2, STATE_DIM), FRONT: torch.rand(2, 2, 3, 64, 96)}
+    for pool, cells in ((False, 6), (True, 1)):
+        policy = make_maniflow((inputs, outputs), pool_image_features=pool)
+        tokens = policy.model.observation_tokens(policy.model_inputs(obs))
+        assert tokens.shape == (2, 2 * (1 + cells), 32)  # 2 frames x (state + camera cells)
+    with pytest.raises(ValueError, match="observation tokens"):
+        policy = make_maniflow((inputs, outputs))
+        policy.model.observation_tokens({**obs, FRONT: torch.rand(2, 2, 3, 32, 32)})
+
+
 @pytest.mark.parametrize("obs_encoder", ["image", "pointcloud"])
 def test_shapes_and_a_training_step(features, obs_encoder):
     policy = make_maniflow(features, obs_encoder)
