@@ -203,3 +203,27 @@ def test_lerobot_train_then_eval_on_pick_with_two_instructions(
     assert (config["type"], config["text_encoder"], config["chunk_size"]) == ("mt_act", "hashed", 4)
     info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
     assert info["overall"]["n_episodes"] == 1
+
+
+@pytest.mark.parametrize("use_film", [True, False], ids=["film_and_token", "token_only"])
+def test_it_learns_task_dependent_actions_for_the_same_observation(features, observation, use_film):
+    """Two tasks on identical observations with opposite actions: only the text tells them
+    apart, so fitting both means the conditioning carries the instruction (each path alone)."""
+    policy = make_mt_act(features, use_vae=False, use_film=use_film)
+    obs = observation(1)
+    batch = {key: value.repeat(4, *[1] * (value.dim() - 1)) for key, value in obs.items()}
+    sign = torch.tensor([1.0, -1.0, 1.0, -1.0])[:, None, None]
+    batch |= {
+        "action": sign * torch.ones(4, CHUNK, ACTION_DIM),
+        "action_is_pad": torch.zeros(4, CHUNK, dtype=torch.bool),
+        "task": [RED, GREEN, RED, GREEN],
+    }
+    optimizer = torch.optim.AdamW(policy.parameters(), lr=1e-3)
+    policy.train()
+    for _ in range(40):
+        loss, _ = policy.forward(batch)
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+    red, green = (policy.predict_action_chunk(obs | {"task": t}) for t in (RED, GREEN))
+    assert red.mean() > 0.5 and green.mean() < -0.5
