@@ -2,7 +2,8 @@
 
 Usage::
 
-    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn dp3 flow_policy act diffusion]
+    .venv/bin/python benchmarks/policies.py [--policies mlp sarnn dp3 flow_policy maniflow mt_act
+        act diffusion]
         [--threads 1]
 
 Every policy gets its default configuration (backbones randomly initialised: no weights are
@@ -35,6 +36,7 @@ STATE_DIM = ACTION_DIM = 7  # UR5e joints + gripper
 POINT_CLOUD_ARGS = {"camera_fovy": 45.0, "point_cloud_cache_size": 0}
 DEPTH_POLICIES = {"dp3": POINT_CLOUD_ARGS, "flow_policy": POINT_CLOUD_ARGS}
 DEPTH_SUFFIX = "_depth"
+TASK = "Put the banana in the blue basket."  # one of Pick's instructions
 
 
 def build(policy_type: str, cameras: int, image_size: int):
@@ -64,6 +66,11 @@ def random_input(key: str, shape: tuple[int, ...]) -> torch.Tensor:
     return torch.rand(shape)
 
 
+def _task(config, batch_size: int) -> dict[str, list[str]]:
+    """The task strings language-conditioned policies (mt_act) read; nothing for others."""
+    return {"task": [TASK] * batch_size} if hasattr(config, "text_encoder") else {}
+
+
 def training_batch(config, batch_size: int) -> dict[str, torch.Tensor]:
     obs_steps = config.observation_delta_indices
     batch = {}
@@ -73,11 +80,12 @@ def training_batch(config, batch_size: int) -> dict[str, torch.Tensor]:
     n_actions = len(config.action_delta_indices)
     batch["action"] = torch.randn(batch_size, n_actions, ACTION_DIM)
     batch["action_is_pad"] = torch.zeros(batch_size, n_actions, dtype=torch.bool)
-    return batch
+    return batch | _task(config, batch_size)
 
 
 def observation(config) -> dict[str, torch.Tensor]:
-    return {key: random_input(key, (1, *ft.shape)) for key, ft in config.input_features.items()}
+    obs = {key: random_input(key, (1, *ft.shape)) for key, ft in config.input_features.items()}
+    return obs | _task(config, 1)
 
 
 def train_step_seconds(policy, batch_size: int, steps: int) -> float:
@@ -117,7 +125,7 @@ def main() -> None:
     parser.add_argument(
         "--policies",
         nargs="+",
-        default=["mlp", "sarnn", "dp3", "flow_policy", "act", "diffusion"],
+        default=["mlp", "sarnn", "dp3", "flow_policy", "maniflow", "mt_act", "act", "diffusion"],
     )
     parser.add_argument("--cameras", type=int, default=2, help="RMB's UR5e default: front, hand")
     parser.add_argument("--image-size", type=int, default=128, help="our env's default, square")
