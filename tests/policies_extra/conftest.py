@@ -204,3 +204,45 @@ def train_and_eval_on(tmp_path, lerobot_cli):
         }
 
     return _run
+
+
+# ------------------------------------------------------ save/load of a policy with EMA weights
+@pytest.fixture
+def ema_save_load(tmp_path):
+    """``ema_save_load(policy, batch, obs) -> (loaded, expected, got)``: train ``policy`` 3
+    steps on ``batch()``, updating its EMA copy after each (so the averaged weights used for
+    inference differ from the trained ones), save it with its processors, load both back with
+    ``from_pretrained``; return the loaded policy and the original's and the loaded policy's
+    actions for ``obs`` under the same noise."""
+    from lerobot.configs.policies import PreTrainedConfig
+    from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+
+    def run(policy, batch, obs: dict) -> tuple:
+        policy.train()
+        optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=1e-2)
+        for _ in range(3):
+            loss, _ = policy.forward(batch())
+            optimizer.zero_grad()
+            loss.backward()
+            optimizer.step()
+            policy.update()
+        state_dim = policy.config.input_features["observation.state"].shape[0]
+        action_dim = policy.config.output_features["action"].shape[0]
+        stats = {
+            "observation.state": {"min": -torch.ones(state_dim), "max": torch.ones(state_dim)},
+            "action": {"min": torch.zeros(action_dim), "max": torch.full((action_dim,), 2.0)},
+        }
+        pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
+        for part in (policy, pre, post):
+            part.save_pretrained(tmp_path)
+
+        config = PreTrainedConfig.from_pretrained(tmp_path)
+        loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+        pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
+        noise = torch.randn(1, config.horizon, action_dim)
+        policy.reset()
+        loaded.reset()
+        expected = post(policy.select_action(pre(obs), noise=noise))
+        return loaded, expected, post2(loaded.select_action(pre2(obs), noise=noise))
+
+    return run

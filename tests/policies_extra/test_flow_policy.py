@@ -13,7 +13,7 @@ import pytest
 import torch
 from lerobot.configs.policies import PreTrainedConfig
 from lerobot.configs.types import FeatureType, PolicyFeature
-from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+from lerobot.policies.factory import get_policy_class
 from safetensors.torch import load_file
 
 from rmb_lerobot.policies_extra.dp3 import DP3Policy
@@ -213,36 +213,12 @@ def test_few_step_inference_is_a_config_choice():
     assert chunk.shape == (1, 4, ACTION_DIM)
 
 
-def test_save_load_round_trip_gives_identical_actions(tmp_path):
+def test_save_load_round_trip_gives_identical_actions(ema_save_load):
     policy = make_flow_policy()
-    policy.train()
-    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=1e-2)
-    for _ in range(3):  # the EMA copy now differs from the trained weights
-        loss, _ = policy.forward(windows(2, policy))
-        optimizer.zero_grad()
-        loss.backward()
-        optimizer.step()
-        policy.update()
-    stats = {
-        "observation.state": {"min": -torch.ones(STATE_DIM), "max": torch.ones(STATE_DIM)},
-        "action": {"min": torch.zeros(ACTION_DIM), "max": torch.full((ACTION_DIM,), 2.0)},
-    }
-    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
-    for part in (policy, pre, post):
-        part.save_pretrained(tmp_path)
-
-    config = PreTrainedConfig.from_pretrained(tmp_path)
-    assert config.type == "flow_policy" and config.camera_fovy == 45.0
-    loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+    loaded, expected, got = ema_save_load(policy, lambda: windows(2, policy), observation(1))
+    assert loaded.config.type == "flow_policy" and loaded.config.camera_fovy == 45.0
     assert int(loaded.ema_updates) == 3
-    pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
-
-    obs = observation(1)
-    noise = torch.randn(1, config.horizon, ACTION_DIM)
-    policy.reset()
-    loaded.reset()
-    expected = post(policy.select_action(pre(obs), noise=noise))
-    torch.testing.assert_close(post2(loaded.select_action(pre2(obs), noise=noise)), expected)
+    torch.testing.assert_close(got, expected)
 
 
 def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on, tmp_path):

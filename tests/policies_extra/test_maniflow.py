@@ -13,7 +13,7 @@ import pytest
 import torch
 from lerobot.configs.policies import PreTrainedConfig
 from lerobot.configs.types import FeatureType, PolicyFeature
-from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+from lerobot.policies.factory import get_policy_class
 from safetensors.torch import load_file
 
 from rmb_lerobot.policies_extra.maniflow import CPU_SIZE, ManiFlowConfig, ManiFlowPolicy
@@ -231,36 +231,12 @@ def test_few_step_inference_is_deterministic_given_a_seed(features, observation)
     torch.testing.assert_close(torch.stack(actions, dim=1), expected)
 
 
-def test_save_load_round_trip_gives_identical_actions(features, observation, tmp_path):
+def test_save_load_round_trip_gives_identical_actions(features, observation, ema_save_load):
     policy = make_maniflow(features)
-    policy.train()
-    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=1e-2)
-    for _ in range(3):  # the EMA copy now differs from the trained weights
-        loss, _ = policy.forward(windows(policy, 2))
-        optimizer.zero_grad()
-        loss.backward()
-        optimizer.step()
-        policy.update()
-    stats = {
-        "observation.state": {"min": -torch.ones(STATE_DIM), "max": torch.ones(STATE_DIM)},
-        "action": {"min": torch.zeros(ACTION_DIM), "max": torch.full((ACTION_DIM,), 2.0)},
-    }
-    pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
-    for part in (policy, pre, post):
-        part.save_pretrained(tmp_path)
-
-    config = PreTrainedConfig.from_pretrained(tmp_path)
-    assert config.type == "maniflow" and config.n_emb == 32
-    loaded = get_policy_class(config.type).from_pretrained(tmp_path)
+    loaded, expected, got = ema_save_load(policy, lambda: windows(policy, 2), observation(1))
+    assert loaded.config.type == "maniflow" and loaded.config.n_emb == 32
     assert int(loaded.ema_updates) == 3
-    pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
-
-    obs = observation(1)
-    noise = torch.randn(1, config.horizon, ACTION_DIM)
-    policy.reset()
-    loaded.reset()
-    expected = post(policy.select_action(pre(obs), noise=noise))
-    torch.testing.assert_close(post2(loaded.select_action(pre2(obs), noise=noise)), expected)
+    torch.testing.assert_close(got, expected)
 
 
 def test_lerobot_train_then_eval_on_an_rmb_env(train_and_eval, tmp_path):
