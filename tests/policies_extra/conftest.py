@@ -246,3 +246,49 @@ def ema_save_load(tmp_path):
         return loaded, expected, post2(loaded.select_action(pre2(obs), noise=noise))
 
     return run
+
+
+# ------------------------------------------------------ depth scenes for point-cloud policies
+class DepthBoxScene:
+    """32x32 depth images (mm) of a table at 0.8 m with an 8x8-pixel box at 0.6 m whose place
+    depends on the seed, a wall at 3 m above; and training windows whose actions follow the
+    box (learnable from the point cloud alone). For DP3 and the policies built on it."""
+
+    size = 32
+    depth_key = "observation.images.front_depth"
+    state_dim = action_dim = 7
+
+    def depth_mm(self, batch_shape: tuple[int, ...], seed: int = 0) -> torch.Tensor:
+        size = self.size
+        g = torch.Generator().manual_seed(seed)
+        depth = torch.full((*batch_shape, 1, size, size), 800.0)
+        depth[..., : size // 4, :] = 3000.0
+        row, col = (int(v) for v in torch.randint(size // 4, size - 8, (2,), generator=g))
+        depth[..., row : row + 8, col : col + 8] = 600.0
+        return depth
+
+    def observation(self, batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
+        g = torch.Generator().manual_seed(seed)
+        return {
+            "observation.state": torch.randn(batch, self.state_dim, generator=g),
+            self.depth_key: self.depth_mm((batch,), seed),
+        }
+
+    def windows(self, batch: int, policy) -> dict[str, torch.Tensor]:
+        cfg = policy.config
+        depth = torch.cat([self.depth_mm((1, cfg.n_obs_steps), seed=i) for i in range(batch)])
+        box = (depth[:, -1, 0] < 700).nonzero()[:, 1:].float().view(batch, -1, 2).mean(1)
+        action = (box / self.size).repeat(1, 4)[:, : self.action_dim, None].transpose(1, 2)
+        return {
+            "observation.state": torch.zeros(batch, cfg.n_obs_steps, self.state_dim),
+            self.depth_key: depth,
+            "action": 2 * action.repeat(1, cfg.horizon, 1) - 1,
+            "action_is_pad": torch.zeros(batch, cfg.horizon, dtype=torch.bool),
+        }
+
+
+@pytest.fixture
+def depth_box() -> DepthBoxScene:
+    """The box scene (:class:`DepthBoxScene`): ``depth_box.observation(2)``,
+    ``depth_box.windows(8, policy)``, ``depth_box.depth_mm((2, 3))``."""
+    return DepthBoxScene()

@@ -57,38 +57,6 @@ def make_dp3(color: bool = False, **overrides) -> DP3Policy:
     return DP3Policy(config)
 
 
-def box_depth_mm(batch_shape: tuple[int, ...], seed: int = 0) -> torch.Tensor:
-    """A table at 0.8 m with a box at 0.6 m whose position depends on ``seed``; wall at 3 m."""
-    g = torch.Generator().manual_seed(seed)
-    depth = torch.full((*batch_shape, 1, SIZE, SIZE), 800.0)
-    depth[..., : SIZE // 4, :] = 3000.0
-    row, col = (int(v) for v in torch.randint(SIZE // 4, SIZE - 8, (2,), generator=g))
-    depth[..., row : row + 8, col : col + 8] = 600.0
-    return depth
-
-
-def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
-    g = torch.Generator().manual_seed(seed)
-    return {
-        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
-        DEPTH: box_depth_mm((batch,), seed),
-    }
-
-
-def windows(batch: int, policy: DP3Policy) -> dict[str, torch.Tensor]:
-    """Training windows whose actions follow the box position (learnable from the cloud)."""
-    cfg = policy.config
-    depth = torch.cat([box_depth_mm((1, cfg.n_obs_steps), seed=i) for i in range(batch)])
-    box = (depth[:, -1, 0] < 700).nonzero()[:, 1:].float().view(batch, -1, 2).mean(1) / SIZE
-    action = box.repeat(1, 4)[:, :ACTION_DIM, None].transpose(1, 2).repeat(1, cfg.horizon, 1)
-    return {
-        "observation.state": torch.zeros(batch, cfg.n_obs_steps, STATE_DIM),
-        DEPTH: depth,
-        "action": 2 * action - 1,
-        "action_is_pad": torch.zeros(batch, cfg.horizon, dtype=torch.bool),
-    }
-
-
 def test_dp3_is_our_policy_type_and_found_by_lerobots_convention():
     assert "dp3" in registered_policy_types()
     assert PreTrainedConfig.get_choice_class("dp3") is DP3Config
@@ -114,10 +82,10 @@ def test_config_windows_defaults_and_checks():
         rgb_only.validate_features()
 
 
-def test_point_clouds_are_metric_cropped_and_fixed_size():
+def test_point_clouds_are_metric_cropped_and_fixed_size(depth_box):
     config = DP3Config(camera_fovy=60.0, num_points=128, crop_max=(2, 2, 1.0), device="cpu")
     clouds = DepthPointClouds(config)
-    depth = box_depth_mm((2, 3))
+    depth = depth_box.depth_mm((2, 3))
     cloud = clouds(depth)
     assert cloud.shape == (2, 3, 128, 3) and cloud.dtype == torch.float32
     # The 3 m wall is cropped away; the table and the box remain, in metres.
@@ -130,18 +98,18 @@ def test_point_clouds_are_metric_cropped_and_fixed_size():
     assert torch.equal(clouds(depth[:1, :1]), cloud[:1, :1])
 
 
-def test_colored_points_carry_the_rgb_of_their_pixel():
+def test_colored_points_carry_the_rgb_of_their_pixel(depth_box):
     config = DP3Config(camera_fovy=45.0, num_points=32, use_pc_color=True, device="cpu")
     rgb = torch.zeros(1, 3, SIZE, SIZE)
     rgb[:, 0] = 1.0  # red table and box
-    cloud = DepthPointClouds(config)(box_depth_mm((1,)), rgb)
+    cloud = DepthPointClouds(config)(depth_box.depth_mm((1,)), rgb)
     assert cloud.shape == (1, 32, 6)
     torch.testing.assert_close(cloud[0, :, 3:], torch.tensor([1.0, 0, 0]).expand(32, 3))
 
 
-def test_shapes_and_a_training_step():
+def test_shapes_and_a_training_step(depth_box):
     policy = make_dp3()
-    batch = windows(4, policy)
+    batch = depth_box.windows(4, policy)
     state, cloud = policy.model_inputs(batch)
     assert state.shape == (4, 2, STATE_DIM) and cloud.shape == (4, 2, 64, 3)
     assert policy.model.global_condition(state, cloud).shape == (4, 2 * (16 + 16))
@@ -156,9 +124,9 @@ def test_shapes_and_a_training_step():
     assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
 
 
-def test_overfits_a_tiny_batch():
+def test_overfits_a_tiny_batch(depth_box):
     policy = make_dp3()
-    batch = windows(8, policy)
+    batch = depth_box.windows(8, policy)
     optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
     policy.train()
     torch.manual_seed(0)
@@ -173,9 +141,9 @@ def test_overfits_a_tiny_batch():
     assert last < 0.3 * first, losses
 
 
-def test_select_action_after_reset_executes_one_chunk_then_replans():
+def test_select_action_after_reset_executes_one_chunk_then_replans(depth_box):
     policy = make_dp3()
-    obs = observation(2)
+    obs = depth_box.observation(2)
     noise = torch.randn(2, policy.config.horizon, ACTION_DIM)
     policy.reset()
     chunk = policy.predict_action_chunk(obs, noise=noise)
@@ -185,13 +153,13 @@ def test_select_action_after_reset_executes_one_chunk_then_replans():
     actions = [policy.select_action(obs, noise=noise) for _ in range(4)]
     torch.testing.assert_close(torch.stack(actions, dim=1), chunk)
     # The queue is empty: the next call plans again, now from two different frames.
-    other = observation(2, seed=5)
+    other = depth_box.observation(2, seed=5)
     assert not torch.allclose(policy.select_action(other, noise=noise), actions[0])
     with pytest.raises(KeyError, match=r"--env\.depth=true"):
         policy.select_action({"observation.state": other["observation.state"]})
 
 
-def test_save_load_round_trip_gives_identical_actions(tmp_path):
+def test_save_load_round_trip_gives_identical_actions(depth_box, tmp_path):
     policy = make_dp3(color=True, use_pc_color=True)
     stats = {
         "observation.state": {"min": -torch.ones(STATE_DIM), "max": torch.ones(STATE_DIM)},
@@ -206,7 +174,7 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
     loaded = get_policy_class(config.type).from_pretrained(tmp_path)
     pre2, post2 = make_pre_post_processors(config, pretrained_path=str(tmp_path))
 
-    obs = {**observation(1), FRONT: torch.rand(1, 3, SIZE, SIZE)}
+    obs = {**depth_box.observation(1), FRONT: torch.rand(1, 3, SIZE, SIZE)}
     noise = torch.randn(1, config.horizon, ACTION_DIM)
     policy.reset()
     loaded.reset()

@@ -51,38 +51,6 @@ def make_flow_policy(**overrides) -> FlowPolicy:
     return FlowPolicy(config)
 
 
-def box_depth_mm(batch_shape: tuple[int, ...], seed: int = 0) -> torch.Tensor:
-    """A table at 0.8 m with a box at 0.6 m whose position depends on ``seed``; wall at 3 m."""
-    g = torch.Generator().manual_seed(seed)
-    depth = torch.full((*batch_shape, 1, SIZE, SIZE), 800.0)
-    depth[..., : SIZE // 4, :] = 3000.0
-    row, col = (int(v) for v in torch.randint(SIZE // 4, SIZE - 8, (2,), generator=g))
-    depth[..., row : row + 8, col : col + 8] = 600.0
-    return depth
-
-
-def observation(batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
-    g = torch.Generator().manual_seed(seed)
-    return {
-        "observation.state": torch.randn(batch, STATE_DIM, generator=g),
-        DEPTH: box_depth_mm((batch,), seed),
-    }
-
-
-def windows(batch: int, policy: FlowPolicy) -> dict[str, torch.Tensor]:
-    """Training windows whose actions follow the box position (learnable from the cloud)."""
-    cfg = policy.config
-    depth = torch.cat([box_depth_mm((1, cfg.n_obs_steps), seed=i) for i in range(batch)])
-    box = (depth[:, -1, 0] < 700).nonzero()[:, 1:].float().view(batch, -1, 2).mean(1) / SIZE
-    action = box.repeat(1, 4)[:, :ACTION_DIM, None].transpose(1, 2).repeat(1, cfg.horizon, 1)
-    return {
-        "observation.state": torch.zeros(batch, cfg.n_obs_steps, STATE_DIM),
-        DEPTH: depth,
-        "action": 2 * action - 1,
-        "action_is_pad": torch.zeros(batch, cfg.horizon, dtype=torch.bool),
-    }
-
-
 def test_flow_policy_is_our_policy_type_and_found_by_lerobots_convention():
     assert "flow_policy" in registered_policy_types()
     assert PreTrainedConfig.get_choice_class("flow_policy") is FlowPolicyConfig
@@ -111,9 +79,9 @@ def test_ema_decay_warms_up_like_diffusion_policys_ema():
     assert ema_decay(10**9, power=0.75, max_decay=0.9999) == 0.9999
 
 
-def test_shapes_a_training_step_and_the_ema_update():
+def test_shapes_a_training_step_and_the_ema_update(depth_box):
     policy = make_flow_policy()
-    batch = windows(4, policy)
+    batch = depth_box.windows(4, policy)
     state, cloud = policy.model_inputs(batch)
     assert state.shape == (4, 2, STATE_DIM) and cloud.shape == (4, 2, 64, 3)
 
@@ -134,11 +102,11 @@ def test_shapes_a_training_step_and_the_ema_update():
     assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
 
 
-def test_the_straight_path_velocity_minimises_the_loss():
+def test_the_straight_path_velocity_minimises_the_loss(depth_box):
     """Consistency flow matching is minimal (zero) for the velocity of the straight noise ->
     action path, the field whose one Euler step from noise gives the actions."""
     policy = make_flow_policy()
-    batch = windows(8, policy)
+    batch = depth_box.windows(8, policy)
     state, cloud = policy.model_inputs(batch)
     actions = batch["action"]
 
@@ -153,11 +121,11 @@ def test_the_straight_path_velocity_minimises_the_loss():
     assert policy.model.compute_loss(state, cloud, actions) > 1e-6
 
 
-def test_loss_and_one_step_error_decrease_on_a_tiny_batch():
+def test_loss_and_one_step_error_decrease_on_a_tiny_batch(depth_box):
     """The loss is O(delta^2) and noisy (fresh noise and times every step), so it is compared
     on the same draws before and after training."""
     policy = make_flow_policy()
-    batch = windows(8, policy)
+    batch = depth_box.windows(8, policy)
     state, cloud = policy.model_inputs(batch)
     target = policy.model.executed(batch["action"])
 
@@ -183,9 +151,9 @@ def test_loss_and_one_step_error_decrease_on_a_tiny_batch():
     assert error_after < 0.9 * error_before  # one step from noise moves towards the actions
 
 
-def test_one_step_inference_is_deterministic_given_a_seed():
+def test_one_step_inference_is_deterministic_given_a_seed(depth_box):
     policy = make_flow_policy()
-    obs = observation(2)
+    obs = depth_box.observation(2)
 
     def chunk(seed: int) -> torch.Tensor:
         policy.reset()
@@ -206,16 +174,18 @@ def test_one_step_inference_is_deterministic_given_a_seed():
     torch.testing.assert_close(torch.stack(actions, dim=1), expected)
 
 
-def test_few_step_inference_is_a_config_choice():
+def test_few_step_inference_is_a_config_choice(depth_box):
     policy = make_flow_policy(num_inference_steps=3)
     noise = torch.randn(1, policy.config.horizon, ACTION_DIM)
-    chunk = policy.predict_action_chunk(observation(1), noise=noise)
+    chunk = policy.predict_action_chunk(depth_box.observation(1), noise=noise)
     assert chunk.shape == (1, 4, ACTION_DIM)
 
 
-def test_save_load_round_trip_gives_identical_actions(ema_save_load):
+def test_save_load_round_trip_gives_identical_actions(depth_box, ema_save_load):
     policy = make_flow_policy()
-    loaded, expected, got = ema_save_load(policy, lambda: windows(2, policy), observation(1))
+    loaded, expected, got = ema_save_load(
+        policy, lambda: depth_box.windows(2, policy), depth_box.observation(1)
+    )
     assert loaded.config.type == "flow_policy" and loaded.config.camera_fovy == 45.0
     assert int(loaded.ema_updates) == 3
     torch.testing.assert_close(got, expected)
