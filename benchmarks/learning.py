@@ -47,13 +47,26 @@ class Recipe:
 
 
 RGB_ENV = (f"--env.cameras=[{','.join(CAMERAS)}]",)
+DEPTH_ENV = ("--env.cameras=[front]", "--env.depth=true")
 RECIPES = {
     "act": Recipe("rgb", ACT_CPU_ARGS, RGB_ENV),  # the main job's ACT
     "mlp": Recipe("rgb", ("--policy.optimizer_lr=1e-4",), RGB_ENV),
     # A SARNN sample is a whole 21-frame window (RMB trains on sequences): 200 x 8 windows is
     # about the CPU time of 1000 x 16 single frames for ACT or MLP on this machine.
     "sarnn": Recipe("rgb", (), RGB_ENV, steps=200, batch_size=8),
-    "dp3": Recipe("depth", (), ("--env.cameras=[front]", "--env.depth=true")),
+    "dp3": Recipe("depth", (), DEPTH_ENV),
+    "flow_policy": Recipe("depth", (), DEPTH_ENV),  # DP3's inputs and CPU-sized U-Net
+    # ManiFlow at its CPU size (the paper's 192 M parameters are for a GPU).
+    "maniflow": Recipe(
+        "rgb",
+        (
+            "--policy.n_layer=2",
+            "--policy.n_head=4",
+            "--policy.n_emb=64",
+            "--policy.resnet_width=16",
+        ),
+        RGB_ENV,
+    ),
 }
 
 
