@@ -156,11 +156,17 @@ def expert_depth_dataset(tmp_path_factory, make_expert_dataset) -> Path:
 
 @pytest.fixture
 def train_and_eval_on(tmp_path, lerobot_cli):
-    """``lerobot-train`` a few steps on ``dataset``, then ``lerobot-eval`` it on Insert with
-    extra ``env_args`` (e.g. ``--env.depth=true``); returns the checkpoint's config and the
-    eval info (``{"config": ..., "eval": ...}``)."""
+    """``lerobot-train`` a few steps on ``dataset``, then ``lerobot-eval`` it on ``env_type``
+    (default Insert) with extra ``env_args`` (e.g. ``--env.depth=true``); returns the
+    checkpoint's config and the eval info (``{"config": ..., "eval": ...}``)."""
 
-    def _run(dataset: Path, policy_type: str, policy_args: list[str], env_args: list[str]) -> dict:
+    def _run(
+        dataset: Path,
+        policy_type: str,
+        policy_args: list[str],
+        env_args: list[str],
+        env_type: str = "rmb_ur5e_insert",
+    ) -> dict:
         out = tmp_path / "train"
         train = lerobot_cli(
             "lerobot_train",
@@ -188,7 +194,7 @@ def train_and_eval_on(tmp_path, lerobot_cli):
             [
                 f"--policy.path={checkpoint}",
                 "--policy.device=cpu",
-                "--env.type=rmb_ur5e_insert",
+                f"--env.type={env_type}",
                 *env_args,
                 "--env.episode_length=5",
                 "--eval.n_episodes=1",

@@ -7,8 +7,6 @@ whose episodes each carry one of 18 instructions.
 
 from __future__ import annotations
 
-import json
-
 import pytest
 import torch
 from lerobot.configs.policies import PreTrainedConfig
@@ -149,7 +147,7 @@ def test_save_load_round_trip_gives_identical_actions(features, observation, tmp
 
 
 def test_lerobot_train_then_eval_on_pick_with_two_instructions(
-    make_expert_dataset, lerobot_cli, tmp_path
+    make_expert_dataset, train_and_eval_on, tmp_path
 ):
     from lerobot.datasets import LeRobotDatasetMetadata
 
@@ -157,52 +155,19 @@ def test_lerobot_train_then_eval_on_pick_with_two_instructions(
     tasks = LeRobotDatasetMetadata("local/pick", root=dataset).tasks.index
     assert len(set(tasks)) == 2 and all(task.startswith("Put the") for task in tasks)
 
-    out = tmp_path / "train"
     tiny = [f"--policy.{k}={v}" for k, v in TINY.items() if k != "device"]
-    train = lerobot_cli(
-        "lerobot_train",
-        [
-            "--policy.type=mt_act",
-            *tiny,
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            "--dataset.repo_id=local/pick",
-            f"--dataset.root={dataset}",
-            f"--output_dir={out}",
-            "--steps=2",
-            "--batch_size=2",
-            "--num_workers=0",
-            "--save_freq=2",
-            "--log_freq=1",
-            "--wandb.enable=false",
-        ],
-        tmp_path,
-    )
-    assert train.returncode == 0, train.stderr[-3000:]
-    checkpoint = out / "checkpoints" / "last" / "pretrained_model"
     # lerobot-eval passes the env's task_description (Pick: the episode's instruction) as
     # batch["task"]; without it the policy would raise.
-    evaluation = lerobot_cli(
-        "lerobot_eval",
-        [
-            f"--policy.path={checkpoint}",
-            "--policy.device=cpu",
-            "--env.type=rmb_ur5e_pick",
-            "--env.cameras=[front]",
-            "--env.image_width=32",
-            "--env.image_height=32",
-            "--env.episode_length=5",
-            "--eval.n_episodes=1",
-            "--eval.batch_size=1",
-            f"--output_dir={tmp_path / 'eval'}",
-        ],
-        tmp_path,
+    result = train_and_eval_on(
+        dataset,
+        "mt_act",
+        tiny,
+        ["--env.cameras=[front]", "--env.image_width=32", "--env.image_height=32"],
+        env_type="rmb_ur5e_pick",
     )
-    assert evaluation.returncode == 0, evaluation.stderr[-3000:]
-    config = json.loads((checkpoint / "config.json").read_text())
+    config = result["config"]
     assert (config["type"], config["text_encoder"], config["chunk_size"]) == ("mt_act", "hashed", 4)
-    info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
-    assert info["overall"]["n_episodes"] == 1
+    assert result["eval"]["overall"]["n_episodes"] == 1
 
 
 @pytest.mark.parametrize("use_film", [True, False], ids=["film_and_token", "token_only"])
