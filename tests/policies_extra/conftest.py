@@ -298,3 +298,33 @@ def depth_box() -> DepthBoxScene:
     """The box scene (:class:`DepthBoxScene`): ``depth_box.observation(2)``,
     ``depth_box.windows(8, policy)``, ``depth_box.depth_mm((2, 3))``."""
     return DepthBoxScene()
+
+
+# ------------------------------------------------------ sampling policies: seeded action chunks
+@pytest.fixture
+def assert_seeded_chunks():
+    """``assert_seeded_chunks(policy, obs, n_actions)``: for a policy that samples its chunk
+    from noise (``predict_action_chunk(obs, noise=...)``): the same seed gives the same chunk
+    of ``n_actions`` actions, another seed another one (noise is its only randomness), and
+    ``select_action`` executes the chunk of a given noise step by step."""
+
+    def check(policy, obs: dict, n_actions: int) -> None:
+        def chunk(seed: int) -> torch.Tensor:
+            policy.reset()
+            torch.manual_seed(seed)
+            return policy.predict_action_chunk(obs)
+
+        first = chunk(3)
+        batch, action_dim = first.shape[0], first.shape[-1]
+        assert first.shape == (batch, n_actions, action_dim) and torch.isfinite(first).all()
+        torch.testing.assert_close(chunk(3), first)
+        assert not torch.allclose(chunk(4), first)
+
+        noise = torch.randn(batch, policy.config.horizon, action_dim)
+        policy.reset()
+        expected = policy.predict_action_chunk(obs, noise=noise)
+        policy.reset()
+        actions = [policy.select_action(obs, noise=noise) for _ in range(n_actions)]
+        torch.testing.assert_close(torch.stack(actions, dim=1), expected)
+
+    return check

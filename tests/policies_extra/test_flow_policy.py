@@ -151,27 +151,9 @@ def test_loss_and_one_step_error_decrease_on_a_tiny_batch(depth_box):
     assert error_after < 0.9 * error_before  # one step from noise moves towards the actions
 
 
-def test_one_step_inference_is_deterministic_given_a_seed(depth_box):
+def test_one_step_inference_is_deterministic_given_a_seed(depth_box, assert_seeded_chunks):
     policy = make_flow_policy()
-    obs = depth_box.observation(2)
-
-    def chunk(seed: int) -> torch.Tensor:
-        policy.reset()
-        torch.manual_seed(seed)
-        return policy.predict_action_chunk(obs)
-
-    first = chunk(3)
-    assert first.shape == (2, 4, ACTION_DIM) and torch.isfinite(first).all()
-    torch.testing.assert_close(chunk(3), first)
-    assert not torch.allclose(chunk(4), first)  # the noise is the only randomness
-
-    # select_action executes that chunk step by step, then plans again.
-    noise = torch.randn(2, policy.config.horizon, ACTION_DIM)
-    policy.reset()
-    expected = policy.predict_action_chunk(obs, noise=noise)
-    policy.reset()
-    actions = [policy.select_action(obs, noise=noise) for _ in range(4)]
-    torch.testing.assert_close(torch.stack(actions, dim=1), expected)
+    assert_seeded_chunks(policy, depth_box.observation(2), n_actions=4)
 
 
 def test_few_step_inference_is_a_config_choice(depth_box):

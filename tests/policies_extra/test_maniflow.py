@@ -208,27 +208,11 @@ def test_loss_and_few_step_error_decrease_on_a_tiny_batch(features):
     assert error_after < 0.7 * error_before  # 3 Euler steps of the EMA land near the actions
 
 
-def test_few_step_inference_is_deterministic_given_a_seed(features, observation):
+def test_few_step_inference_is_deterministic_given_a_seed(
+    features, observation, assert_seeded_chunks
+):
     policy = make_maniflow(features)
-    obs = observation(2)
-
-    def chunk(seed: int) -> torch.Tensor:
-        policy.reset()
-        torch.manual_seed(seed)
-        return policy.predict_action_chunk(obs)
-
-    first = chunk(3)
-    assert first.shape == (2, 4, ACTION_DIM) and torch.isfinite(first).all()
-    torch.testing.assert_close(chunk(3), first)
-    assert not torch.allclose(chunk(4), first)  # the noise is the only randomness
-
-    # select_action executes that chunk step by step, then plans again.
-    noise = torch.randn(2, policy.config.horizon, ACTION_DIM)
-    policy.reset()
-    expected = policy.predict_action_chunk(obs, noise=noise)
-    policy.reset()
-    actions = [policy.select_action(obs, noise=noise) for _ in range(4)]
-    torch.testing.assert_close(torch.stack(actions, dim=1), expected)
+    assert_seeded_chunks(policy, observation(2), n_actions=4)
 
 
 def test_save_load_round_trip_gives_identical_actions(features, observation, ema_save_load):
