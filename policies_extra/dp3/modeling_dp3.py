@@ -15,16 +15,16 @@ input; LeRobot's processors only normalise state and action.
 from __future__ import annotations
 
 import itertools
-from collections import deque
 
 import torch
 import torch.nn.functional as F
 from diffusers.schedulers.scheduling_ddim import DDIMScheduler
 from lerobot.policies.diffusion.modeling_diffusion import DiffusionConditionalUnet1d
 from lerobot.policies.pretrained import PreTrainedPolicy
-from lerobot.policies.utils import populate_queues
 from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
+
+from rmb_lerobot.policies_extra.observation_history import ObservationHistory
 
 from .configuration_dp3 import DP3Config, PointCloudUnetConfig
 from .point_cloud import DepthPointClouds, resolve_camera_fovy
@@ -32,7 +32,7 @@ from .point_cloud import DepthPointClouds, resolve_camera_fovy
 POINT_CLOUD = "observation.point_cloud"  # (B, n_obs_steps, num_points, 3 or 6), made here
 
 
-class DP3Policy(PreTrainedPolicy):
+class DP3Policy(ObservationHistory, PreTrainedPolicy):
     """Point cloud + state -> chunk of actions, ``n_action_steps`` executed per prediction."""
 
     config_class = DP3Config
@@ -58,14 +58,6 @@ class DP3Policy(PreTrainedPolicy):
         keys = (OBS_STATE, self.config.depth_key, self.config.color_key)
         return tuple(k for k in keys if k is not None)
 
-    def get_optim_params(self) -> list[nn.Parameter]:
-        return [p for p in self.parameters() if p.requires_grad]
-
-    def reset(self) -> None:
-        """Start an episode: forget the observation history and the queued actions."""
-        self._queues = {key: deque(maxlen=self.config.n_obs_steps) for key in self.observation_keys}
-        self._queues[ACTION] = deque(maxlen=self.config.n_action_steps)
-
     def model_inputs(self, batch: dict[str, Tensor]) -> tuple[Tensor, Tensor]:
         """State (B, T, S) and point clouds (B, T, P, C) of observation windows (B, T, ...)."""
         self._check_inputs(batch)
@@ -73,50 +65,17 @@ class DP3Policy(PreTrainedPolicy):
         rgb = batch[cfg.color_key] if cfg.color_key is not None else None
         return batch[OBS_STATE], self.point_clouds(batch[cfg.depth_key], rgb)
 
-    def _check_inputs(self, batch: dict[str, Tensor]) -> None:
-        missing = [k for k in self.observation_keys if k not in batch]
-        if missing:
-            raise KeyError(
-                f"{self.name} needs {missing}: RMB env types deliver depth with --env.depth=true"
-            )
-
     def sampling_model(self) -> PointCloudUnet:
         """The network that predicts actions (an EMA copy of :attr:`model` may stand in)."""
         return self.model
 
-    def _window_from_history(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
-        """Append one observation (B, ...) to the history; the last ``n_obs_steps`` frames."""
-        self._check_inputs(batch)
-        self._queues = populate_queues(self._queues, {k: batch[k] for k in self.observation_keys})
-        return {k: torch.stack(list(self._queues[k]), dim=1) for k in self.observation_keys}
-
-    @torch.no_grad()
-    def predict_action_chunk(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
-        """(B, n_action_steps, A) actions from the current step on.
-
-        ``batch`` is either one observation (B, ...), appended to the history kept since
-        :meth:`reset`, or a window (B, n_obs_steps, ...) as the dataset gives.
-        """
-        self.eval()
-        if batch[OBS_STATE].ndim == 2:
-            batch = self._window_from_history(batch)
-        return self.sampling_model().generate_actions(*self.model_inputs(batch), noise=noise)
-
-    @torch.no_grad()
-    def select_action(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
-        """Next action (B, A): a new chunk every ``n_action_steps`` calls, queued in between."""
-        window = self._window_from_history(batch)
-        if not self._queues[ACTION]:
-            self.eval()
-            chunk = self.sampling_model().generate_actions(*self.model_inputs(window), noise=noise)
-            self._queues[ACTION].extend(chunk.transpose(0, 1))
-        return self._queues[ACTION].popleft()
+    def sample_chunk(self, window: dict[str, Tensor], noise: Tensor | None) -> Tensor:
+        return self.sampling_model().generate_actions(*self.model_inputs(window), noise=noise)
 
     def forward(self, batch: dict[str, Tensor]) -> tuple[Tensor, dict]:
         """Denoising loss of a batch of windows: observations (B, n_obs_steps, ...), ``action``
         (B, horizon, A) and ``action_is_pad`` (B, horizon)."""
-        if batch[OBS_STATE].ndim == 2:  # n_obs_steps == 1 without a time axis
-            batch = {**batch, **{k: batch[k].unsqueeze(1) for k in self.observation_keys}}
+        batch = self.as_windows(batch)
         state, cloud = self.model_inputs(batch)
         loss = self.model.compute_loss(state, cloud, batch[ACTION], batch.get(f"{ACTION}_is_pad"))
         return loss, {}

@@ -19,7 +19,7 @@ from __future__ import annotations
 import copy
 
 import torch
-from torch import Tensor
+from torch import Tensor, nn
 
 from rmb_lerobot.policies_extra.dp3.modeling_dp3 import DP3Policy, PointCloudUnet
 
@@ -88,6 +88,16 @@ def ema_decay(update: int, power: float, max_decay: float) -> float:
     return 0.0 if k == 0 else min(1.0 - (1.0 + k) ** -power, max_decay)
 
 
+@torch.no_grad()
+def ema_update(average: nn.Module, model: nn.Module, decay: float) -> None:
+    """Move ``average``'s parameters towards ``model``'s (``decay`` of the old kept); copy the
+    buffers."""
+    for avg, current in zip(average.parameters(), model.parameters(), strict=True):
+        avg.lerp_(current, 1.0 - decay)
+    for avg, current in zip(average.buffers(), model.buffers(), strict=True):
+        avg.copy_(current)
+
+
 class FlowPolicy(DP3Policy):
     """Point cloud + state -> chunk of actions from one flow step, ``n_action_steps`` executed."""
 
@@ -115,12 +125,7 @@ class FlowPolicy(DP3Policy):
             return
         self.ema_updates += 1
         decay = ema_decay(int(self.ema_updates), self.config.ema_power, self.config.ema_max_decay)
-        for average, current in zip(
-            self.ema_model.parameters(), self.model.parameters(), strict=True
-        ):
-            average.lerp_(current, 1.0 - decay)
-        for average, current in zip(self.ema_model.buffers(), self.model.buffers(), strict=True):
-            average.copy_(current)
+        ema_update(self.ema_model, self.model, decay)
 
 
 # LeRobot's factory finds the policy class of a config ``<Name>Config`` as ``<Name>Policy``.

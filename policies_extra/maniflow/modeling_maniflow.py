@@ -28,19 +28,22 @@ from __future__ import annotations
 
 import copy
 import math
-from collections import deque
 
 import torch
 import torch.nn.functional as F
 from lerobot.policies.pretrained import PreTrainedPolicy
-from lerobot.policies.utils import populate_queues
 from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
 from torchvision.models.resnet import BasicBlock
 
 from rmb_lerobot.policies_extra.dp3.modeling_dp3 import PointNetEncoder, mlp
 from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds, resolve_camera_fovy
-from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import ema_decay, per_sample
+from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import (
+    ema_decay,
+    ema_update,
+    per_sample,
+)
+from rmb_lerobot.policies_extra.observation_history import ObservationHistory
 
 from .configuration_maniflow import ManiFlowConfig
 
@@ -297,7 +300,7 @@ def _rows(obs: dict[str, Tensor], rows: slice) -> dict[str, Tensor]:
     return {k: v[rows] for k, v in obs.items()}
 
 
-class ManiFlowPolicy(PreTrainedPolicy):
+class ManiFlowPolicy(ObservationHistory, PreTrainedPolicy):
     """Images or point cloud + state -> chunk of actions, ``n_action_steps`` executed.
 
     LeRobot's factory finds it by convention: ``ManiFlowConfig`` -> ``ManiFlowPolicy`` in the
@@ -306,6 +309,9 @@ class ManiFlowPolicy(PreTrainedPolicy):
 
     config_class = ManiFlowConfig
     name = "maniflow"
+    missing_input_hint = (
+        "RMB env types deliver cameras with --env.cameras=[...], depth with --env.depth=true"
+    )
 
     def __init__(self, config: ManiFlowConfig, dataset_meta=None, **kwargs):
         """``dataset_meta`` (from ``make_policy`` when training) supplies a depth camera's fovy."""
@@ -330,61 +336,23 @@ class ManiFlowPolicy(PreTrainedPolicy):
         keys = (OBS_STATE, cfg.depth_key, cfg.color_key)
         return tuple(k for k in keys if k is not None)
 
-    def get_optim_params(self) -> list[nn.Parameter]:
-        return [p for p in self.parameters() if p.requires_grad]
-
-    def reset(self) -> None:
-        """Start an episode: forget the observation history and the queued actions."""
-        self._queues = {key: deque(maxlen=self.config.n_obs_steps) for key in self.observation_keys}
-        self._queues[ACTION] = deque(maxlen=self.config.n_action_steps)
-
     def model_inputs(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
         """Observation windows (B, T, ...) -> what the model encodes (depth becomes a cloud)."""
-        missing = [k for k in self.observation_keys if k not in batch]
-        if missing:
-            raise KeyError(
-                f"maniflow needs {missing}: RMB env types deliver depth with --env.depth=true"
-            )
+        self._check_inputs(batch)
         cfg = self.config
         if self.point_clouds is None:
             return {k: batch[k] for k in self.observation_keys}
         rgb = batch[cfg.color_key] if cfg.color_key is not None else None
         return {OBS_STATE: batch[OBS_STATE], CLOUD: self.point_clouds(batch[cfg.depth_key], rgb)}
 
-    def _window_from_history(self, batch: dict[str, Tensor]) -> dict[str, Tensor]:
-        missing = [k for k in self.observation_keys if k not in batch]
-        if missing:
-            raise KeyError(f"maniflow needs {missing}")
-        self._queues = populate_queues(self._queues, {k: batch[k] for k in self.observation_keys})
-        return {k: torch.stack(list(self._queues[k]), dim=1) for k in self.observation_keys}
-
-    @torch.no_grad()
-    def predict_action_chunk(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
-        """(B, n_action_steps, A) actions from the current step on, from the EMA weights.
-
-        ``batch`` is one observation (B, ...), appended to the history kept since :meth:`reset`,
-        or a window (B, n_obs_steps, ...) as the dataset gives.
-        """
-        self.eval()
-        if batch[OBS_STATE].ndim == 2:
-            batch = self._window_from_history(batch)
-        return self.ema_model.generate_actions(self.model_inputs(batch), noise=noise)
-
-    @torch.no_grad()
-    def select_action(self, batch: dict[str, Tensor], noise: Tensor | None = None) -> Tensor:
-        """Next action (B, A): a new chunk every ``n_action_steps`` calls, queued in between."""
-        window = self._window_from_history(batch)
-        if not self._queues[ACTION]:
-            self.eval()
-            chunk = self.ema_model.generate_actions(self.model_inputs(window), noise=noise)
-            self._queues[ACTION].extend(chunk.transpose(0, 1))
-        return self._queues[ACTION].popleft()
+    def sample_chunk(self, window: dict[str, Tensor], noise: Tensor | None) -> Tensor:
+        """Actions from the EMA weights."""
+        return self.ema_model.generate_actions(self.model_inputs(window), noise=noise)
 
     def forward(self, batch: dict[str, Tensor]) -> tuple[Tensor, dict]:
         """Loss of a batch of windows: observations (B, n_obs_steps, ...), ``action``
         (B, horizon, A) and ``action_is_pad`` (B, horizon)."""
-        if batch[OBS_STATE].ndim == 2:  # n_obs_steps == 1 without a time axis
-            batch = {**batch, **{k: batch[k].unsqueeze(1) for k in self.observation_keys}}
+        batch = self.as_windows(batch)
         return self.model.compute_loss(
             self.model_inputs(batch), batch[ACTION], self.ema_model, batch.get(f"{ACTION}_is_pad")
         )
@@ -395,9 +363,4 @@ class ManiFlowPolicy(PreTrainedPolicy):
         each optimizer step)."""
         self.ema_updates += 1
         decay = ema_decay(int(self.ema_updates), self.config.ema_power, self.config.ema_max_decay)
-        for average, current in zip(
-            self.ema_model.parameters(), self.model.parameters(), strict=True
-        ):
-            average.lerp_(current, 1.0 - decay)
-        for average, current in zip(self.ema_model.buffers(), self.model.buffers(), strict=True):
-            average.copy_(current)
+        ema_update(self.ema_model, self.model, decay)
