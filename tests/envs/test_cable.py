@@ -1,5 +1,7 @@
 """Cable: success criterion on constructed cables, worlds, rod model, stability, the expert."""
 
+from typing import ClassVar
+
 import mujoco
 import numpy as np
 import pytest
@@ -262,6 +264,15 @@ def test_panda_expert_turns_within_reach_of_the_connector(robot_env):
     reach = [np.linalg.norm(leg.pos[:2] - anchor[:2]) for leg in turn]
     assert max(reach) <= expert.max_reach * CABLE_LENGTH + 1e-9
     assert CableExpert(robot_env("cable")).max_reach is None  # the UR5e's half circle
+
+
+def test_robot_tuning_may_only_name_the_experts_settings(robot_env):
+    class Misspelt(CableExpert):
+        robot_tuning: ClassVar = {"panda": {"max_rech": 1.05}}
+
+    with pytest.raises(AttributeError, match=r"Misspelt.robot_tuning\['panda'\] names 'max_rech'"):
+        Misspelt(robot_env("panda_cable"))
+    Misspelt(robot_env("cable"))  # other robots are not tuned
 
 
 def test_worlds_span_rmbs_pole_offsets():
