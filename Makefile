@@ -11,6 +11,10 @@ export UV_PYTHON_DOWNLOADS := never
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
 VENV := .venv
+# Optional extras the test suite exercises (VLA policies to their download boundary, MT-ACT's
+# sentence encoder, rmb-benchmark on Ray, rmb-data view). `keyboard` (Linux input devices) is left
+# out: its tests use a test double.
+EXTRAS := --extra vla --extra text --extra benchmark --extra viz
 STAMP := $(VENV)/.synced
 
 .PHONY: help setup demo test lint format bench bench-learning clean
@@ -24,7 +28,7 @@ help:
 # Re-sync whenever the lock or the project metadata changes.
 $(STAMP): pyproject.toml uv.lock .python-version
 	$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv>=0.9,<1"
-	$(PYTHON) -m uv sync --locked
+	$(PYTHON) -m uv sync --locked $(EXTRAS)
 	touch $@
 
 setup: $(STAMP)

@@ -1,0 +1,1 @@
+"""Sensors beyond cameras and joints: tactile grids, keyboard contact grids."""

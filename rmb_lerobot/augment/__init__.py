@@ -1,0 +1,1 @@
+"""SART data augmentation around one demonstration (RMB's RoboManipAug)."""

@@ -1,0 +1,1 @@
+"""rmb-data: inspect, compare, refine, extend and view RMB episodes."""

@@ -1,0 +1,1 @@
+"""Interactive language-instruction rollout over a local socket."""
