@@ -91,6 +91,9 @@ def component_names(key: str, dim: int, layout: K.RobotLayout, *, policy: bool) 
             names = _per_eef(_WRENCH, layout.num_eefs)
         else:
             names = list(_OMNI)
+    elif K.is_tactile_key(key):  # a fingertip grid, row-major: r<row>_c<column>
+        rows, cols = K.TACTILE_SHAPE
+        names = [f"r{i}_c{j}" for i in range(rows) for j in range(cols)]
     if names is None or len(names) != dim:
         names = [f"{key}_{i}" for i in range(dim)]
     return names

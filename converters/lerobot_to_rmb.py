@@ -123,6 +123,8 @@ def _lowdim(
 
 
 def _step_value(key: str, values: np.ndarray, i: int) -> Any:
+    if K.is_tactile_key(key) and values.shape[1] == np.prod(K.TACTILE_SHAPE):
+        return values[i].reshape(K.TACTILE_SHAPE)  # RMB stores each grid as (rows, cols)
     spec = K.KEYS.get(key)
     return values[i, 0] if spec is not None and spec.quantity is None else values[i]
 

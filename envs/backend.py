@@ -113,6 +113,11 @@ class Backend(SceneState):
     def measured_wrench(self) -> np.ndarray:
         """Per arm the wrist force/torque (fx, fy, fz, nx, ny, nz) in the sensor frame."""
 
+    def tactile(self) -> dict[str, np.ndarray]:
+        """Tactile grids by RMB key (e.g. ``left_tactile_sensor``: ``(5, 8)`` normal forces in
+        N); empty unless the backend was built with tactile sensing."""
+        return {}
+
     # ---------------------------------------------------------------- cameras
     @abstractmethod
     def render(

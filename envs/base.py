@@ -75,7 +75,7 @@ class RmbEnv(gym.Env):
         The camera :meth:`render` shows.
     backend_options:
         Passed to the backend (MuJoCo: ``frame_skip``, ``shadows``, ``reflections``,
-        ``antialias``, ``visual_mesh_error``; see
+        ``antialias``, ``visual_mesh_error``, ``tactile``; see
         :class:`~rmb_lerobot.envs.mujoco.backend.MujocoBackend`).
     """
 
@@ -340,6 +340,7 @@ class RmbEnv(gym.Env):
             step[K.rgb_image_key(cam)] = rgb
         for cam, depth in self._depth_m.items():
             step[K.depth_image_key(cam)] = depth
+        step.update(self.sim.tactile())  # RMB's fingertip grids, with tactile=True
         return step
 
     def rmb_attrs(self) -> dict[str, Any]:

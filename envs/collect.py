@@ -61,6 +61,8 @@ class CollectConfig:
     # Cycle through the task's variants (Pick's 18 instructions) instead of drawing one per
     # episode from the seed: episodes i..i+len(world_idx)-1 share a variant, across the worlds.
     cycle_variants: bool = False
+    # Record RMB's fingertip tactile grids (left_tactile_sensor, right_tactile_sensor: 5 x 8).
+    tactile: bool = False
 
     def episode_path(self, index: int, world_idx: int) -> Path:
         entry = entry_for(self.env)
@@ -91,6 +93,7 @@ class Collector:
             image_size=config.image_size,
             depth=config.depth,
             random_shift=config.random_shift,
+            tactile=config.tactile,
         )
         self.expert = entry.load_expert_class()(self.env)
         self.variants = self.env.task.episode_variants() if config.cycle_variants else ()

@@ -56,6 +56,10 @@ class RmbEnvConfig(EnvConfig):
     depth: bool = False
     # Evaluate in one world (0..5) only; None: each episode's world is drawn from its seed.
     world_idx: int | None = None
+    # Append RMB's fingertip tactile grids (left, then right, 5 x 8 each, row-major) to the
+    # state, as a dataset converted with --state-keys measured_joint_pos left_tactile_sensor
+    # right_tactile_sensor holds them (see TactileInState).
+    tactile: bool = False
 
     def __post_init__(self) -> None:
         layout = entry_for(self.task).robot_record.layout if self.task else K.UR5E_LAYOUT
@@ -64,7 +68,9 @@ class RmbEnvConfig(EnvConfig):
             N.ACTION_KEY: PolicyFeature(
                 FeatureType.ACTION, (action_dim(self.action_mode, layout),)
             ),
-            N.ENV_STATE_KEY: PolicyFeature(FeatureType.STATE, (layout.num_joints,)),
+            N.ENV_STATE_KEY: PolicyFeature(
+                FeatureType.STATE, (layout.num_joints + self._tactile_dim(),)
+            ),
         }
         self.features_map = {N.ACTION_KEY: N.ACTION_KEY, N.ENV_STATE_KEY: N.STATE}
         for camera in self.cameras:
@@ -77,6 +83,14 @@ class RmbEnvConfig(EnvConfig):
                 )
                 self.features_map[depth_observation_key(camera)] = N.depth_image_key(camera)
 
+    def _tactile_dim(self) -> int:
+        if not self.tactile:
+            return 0
+        from rmb_lerobot.envs.sensors.tactile import pads_for
+
+        robot = entry_for(self.task).robot_record.name if self.task else "ur5e"
+        return len(pads_for(robot)) * int(np.prod(K.TACTILE_SHAPE))
+
     @property
     def gym_kwargs(self) -> dict:
         return {
@@ -85,6 +99,7 @@ class RmbEnvConfig(EnvConfig):
             "action_mode": self.action_mode,
             "random_shift": self.random_shift,
             "depth": self.depth,
+            "tactile": self.tactile,
             "render_mode": self.render_mode,
             "render_camera": self.cameras[0] if self.cameras else "front",
             "max_episode_steps": self.episode_length,
@@ -145,6 +160,35 @@ class DepthForLeRobot(gym.ObservationWrapper):
         return observation
 
 
+class TactileInState(gym.ObservationWrapper):
+    """The fingertip tactile grids appended to ``agent_pos`` (LeRobot's ``observation.state``).
+
+    For an env made with ``tactile=True``: each pad's ``(rows, cols)`` grid, row-major, in
+    the robot's pad order (the UR5e: ``left_tactile_sensor``, then ``right_tactile_sensor``),
+    after the joint vector: the layout of a dataset converted with ``--state-keys
+    measured_joint_pos left_tactile_sensor right_tactile_sensor``.
+    """
+
+    def __init__(self, env: gym.Env):
+        super().__init__(env)
+        from rmb_lerobot.envs.sensors.tactile import pads_for
+
+        self.tactile_keys = tuple(pad.key for pad in pads_for(env.unwrapped.robot.name))
+        joints = env.observation_space["agent_pos"].shape[0]
+        size = len(self.tactile_keys) * int(np.prod(K.TACTILE_SHAPE))
+        self.observation_space = gym.spaces.Dict(
+            {
+                **env.observation_space.spaces,
+                "agent_pos": gym.spaces.Box(-np.inf, np.inf, (joints + size,), dtype=np.float32),
+            }
+        )
+
+    def observation(self, observation: dict) -> dict:
+        grids = self.env.unwrapped.sim.tactile()
+        parts = [observation["agent_pos"], *(grids[key].ravel() for key in self.tactile_keys)]
+        return {**observation, "agent_pos": np.concatenate(parts).astype(np.float32)}
+
+
 class FixedWorld(gym.Wrapper):
     """Every episode in one world: ``reset`` adds ``world_idx`` unless the caller set it."""
 
@@ -157,11 +201,13 @@ class FixedWorld(gym.Wrapper):
 
 
 def make_lerobot_env(task: str, world_idx: int | None = None, **kwargs) -> gym.Env:
-    """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras), in
-    one world if ``world_idx`` is given."""
+    """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras), the
+    tactile grids in the state when ``tactile=True``, in one world if ``world_idx`` is given."""
     env = make_env(task, **kwargs)
     if "depth" in env.observation_space.spaces:
         env = DepthForLeRobot(env)
+    if kwargs.get("tactile"):
+        env = TactileInState(env)
     return env if world_idx is None else FixedWorld(env, world_idx)
 
 

@@ -231,6 +231,19 @@ def command_key(key: str) -> str:
     return _key_name(COMMAND, s.quantity, s.is_relative)
 
 
+# ---------------------------------------------------------------- tactile grids
+# RMB stores each MuJoCo tactile sensor (isri-aist's plugin) under the sensor's name, one
+# (rows, cols) grid of normal forces (N) per step; RMB's UR5e has one per 2F-85 fingertip pad.
+TACTILE_SUFFIX = "_tactile_sensor"
+LEFT_TACTILE_SENSOR = "left" + TACTILE_SUFFIX
+RIGHT_TACTILE_SENSOR = "right" + TACTILE_SUFFIX
+TACTILE_SHAPE = (5, 8)  # rows along the pad's width, columns along the finger
+
+
+def is_tactile_key(key: str) -> bool:
+    return key.endswith(TACTILE_SUFFIX)
+
+
 # ---------------------------------------------------------------- cameras
 def rgb_image_key(camera: str) -> str:
     return camera + RGB_IMAGE_SUFFIX

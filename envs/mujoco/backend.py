@@ -24,6 +24,7 @@ from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer, mujoco
 from rmb_lerobot.envs.mujoco.robots import build_robot_model
 from rmb_lerobot.envs.mujoco.scene import build_scene
 from rmb_lerobot.envs.robots import Robot
+from rmb_lerobot.envs.sensors.tactile import TactileGrid, add_pad_sites, pads_for
 from rmb_lerobot.envs.workspace import Workspace
 
 if TYPE_CHECKING:
@@ -50,6 +51,9 @@ class MujocoBackend(Backend):
     visual_mesh_error:
         How far (m) the robot's simplified visual meshes may leave the original surface
         (default 0.5 mm); 0 for the original meshes. Physics is the same at every setting.
+    tactile:
+        Add RMB's fingertip tactile sites and read their grids
+        (:mod:`rmb_lerobot.envs.sensors.tactile`; :meth:`tactile`). Off: the model is unchanged.
     """
 
     def __init__(
@@ -64,6 +68,7 @@ class MujocoBackend(Backend):
         reflections: bool = False,
         antialias: bool = True,
         visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
+        tactile: bool = False,
     ):
         if frame_skip < 1:
             raise ValueError(f"frame_skip must be >= 1, got {frame_skip!r}")
@@ -79,9 +84,12 @@ class MujocoBackend(Backend):
         }
         self.robot_model = build_robot_model(robot, visual_mesh_error=visual_mesh_error)
         spec = build_scene(self.robot_model, workspace, max_render_size=image_size)
+        pads = pads_for(robot.name) if tactile else ()
+        add_pad_sites(spec, pads)
         task.build(spec, self)
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
+        self._tactile = {pad.key: TactileGrid(self.model, pad.site) for pad in pads}
         self.kinematics = tuple(ArmKinematics(self.model, arm) for arm in self.robot_model.arms)
         self._camera_names = {
             **{c.name: c.name for c in workspace.cameras},
@@ -165,6 +173,9 @@ class MujocoBackend(Backend):
                 for f, t in zip(self._force_adr, self._torque_adr, strict=True)
             ]
         )
+
+    def tactile(self) -> dict[str, np.ndarray]:
+        return {key: grid.read(self.data) for key, grid in self._tactile.items()}
 
     # ---------------------------------------------------------------- cameras
     def _get_renderer(self) -> MultiCameraRenderer:

@@ -53,6 +53,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-depth", action="store_true", help="record RGB only")
     parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
     parser.add_argument(
+        "--tactile",
+        action="store_true",
+        help="also record RMB's fingertip tactile grids (left_tactile_sensor, "
+        "right_tactile_sensor: 5 x 8 normal forces in N; UR5e)",
+    )
+    parser.add_argument(
         "--success-only", action="store_true", help="keep only successful episodes (retrying)"
     )
     parser.add_argument("--workers", type=int, default=1, help="parallel worker processes")
@@ -104,6 +110,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 depth_codec=args.depth_codec,
                 overwrite=args.overwrite,
                 cycle_variants=args.cycle_instructions,
+                tactile=args.tactile,
             )
             kept = successes = 0
             run = collect(config, workers=args.workers)
