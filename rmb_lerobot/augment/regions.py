@@ -190,22 +190,32 @@ def gripper_events(gripper: np.ndarray, min_change: float = 1e-3) -> list[tuple[
     return events
 
 
-def _last_turn(positions: np.ndarray, window: int, min_angle_deg: float) -> int | None:
-    """The last step where the tool path turns by more than ``min_angle_deg`` between the
-    ``window`` steps before and after it (steps where it barely moves are skipped)."""
+def _turn_angles(positions: np.ndarray, window: int) -> np.ndarray:
+    """Per step, the angle (deg) between the tool's motion over the ``window`` steps before and
+    after it; 0 where either barely moves (under 2 % of the path length) or near the ends."""
     n = len(positions)
+    angles = np.zeros(n)
     path_length = np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()
     min_move = 0.02 * path_length
-    for t in range(n - 1 - window, window - 1, -1):
+    for t in range(window, n - window):
         before = positions[t] - positions[t - window]
         after = positions[t + window] - positions[t]
         nb, na = np.linalg.norm(before), np.linalg.norm(after)
-        if nb < min_move or na < min_move:
-            continue
-        angle = np.degrees(np.arccos(np.clip(before @ after / (nb * na), -1.0, 1.0)))
-        if angle >= min_angle_deg:
-            return t
-    return None
+        if nb >= min_move and na >= min_move and min_move > 0:
+            angles[t] = np.degrees(np.arccos(np.clip(before @ after / (nb * na), -1.0, 1.0)))
+    return angles
+
+
+def _last_turn(positions: np.ndarray, window: int, min_angle_deg: float) -> int | None:
+    """The sharpest step of the tool path's last turn of more than ``min_angle_deg``."""
+    angles = _turn_angles(positions, window)
+    turning = np.flatnonzero(angles >= min_angle_deg)
+    if not len(turning):
+        return None
+    end = start = turning[-1]
+    while start > 0 and angles[start - 1] >= min_angle_deg:
+        start -= 1
+    return int(start + np.argmax(angles[start : end + 1]))
 
 
 def propose_regions(

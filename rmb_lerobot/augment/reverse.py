@@ -119,7 +119,8 @@ def reverse_relative(rel: np.ndarray, *, pose: bool, shift: int = 0) -> np.ndarr
     valid = (source >= 1) & (source <= length - 1)
     valid[0] = False
     picked = rel[source[valid]]
-    out[valid] = invert_rel_pose(picked) if pose else -picked
+    if len(picked):
+        out[valid] = invert_rel_pose(picked) if pose else -picked
     return out.astype(rel.dtype, copy=False)
 
 

@@ -11,7 +11,7 @@ For each acceptable region (:mod:`rmb_lerobot.augment.regions`) and each of N sa
    drive the tool there in ``duration`` seconds (geodesic SE(3) interpolation with a smooth
    start and stop, solved by the env's IK) while recording every RMB key the env records;
 3. play that recording backwards (:func:`~rmb_lerobot.augment.reverse.reverse_recording`; the
-   command keys advanced by twice the controller lag measured in the recording), append the
+   command keys advanced by twice the controller lag measured in the demo), append the
    rest of the demonstration after the convergence step, renumber ``time``, recompute the
    relative keys at the join, and write a complete RMB episode atomically with
    :class:`~rmb_lerobot.EpisodeWriter`.
@@ -102,7 +102,7 @@ class AugmentConfig:
     seed: int = 0  # reset seed (the demo's world) and the base of the sampling seeds
     fmt: str | None = None  # "rmb" or "hdf5"; default: the demo's
     overwrite: bool = False
-    command_shift: int | None = None  # None: 2 x the lag measured in each recording
+    command_shift: int | None = None  # None: 2 x the controller lag measured in the demo
 
     def __post_init__(self) -> None:
         if self.samples_per_region < 1:
@@ -179,6 +179,8 @@ class Augmenter:
                     "SART needs this key in the demo", path=self.demo_path, key=key
                 )
         self.data = {key: np.asarray(demo[key][:]) for key in self.lowdim_keys}
+        # The controller's lag, measured where the demo moves: commands lead states by it.
+        self.lag = estimate_lag(self.data[K.COMMAND_JOINT_POS], self.data[K.MEASURED_JOINT_POS])
         rate = control_rate(self.data[K.TIME], path=self.demo_path)
         self.dt = 1.0 / rate
         self.cameras = list(dict.fromkeys(K.camera_of(k) for k in self.image_keys))
@@ -305,10 +307,7 @@ class Augmenter:
         forward.update(derive_relative(forward, set(self.demo.keys())))
         shift = self.config.command_shift
         if shift is None:
-            arm = self.env.robot.joint_slices()[0][0]
-            shift = 2 * estimate_lag(
-                forward[K.COMMAND_JOINT_POS][:, arm], forward[K.MEASURED_JOINT_POS][:, arm]
-            )
+            shift = 2 * self.lag
         backward = reverse_recording(forward, command_shift=shift)
         return backward, shift
 
