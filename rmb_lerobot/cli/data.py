@@ -192,7 +192,9 @@ def _add_tile(sub) -> None:
         help="outcome per video in order, instead of eval_info.json",
     )
     p.add_argument("--columns", type=int, help="tiles per row (default: a square grid)")
-    p.add_argument("--border", type=int, help="frame width in pixels (default: 1/20 of the tile)")
+    p.add_argument(
+        "--border", type=int, help="frame width in pixels (default: 1/16 of the tile, at least 4)"
+    )
     p.add_argument(
         "--no-labels", action="store_true", help="do not write episode and outcome on the tiles"
     )

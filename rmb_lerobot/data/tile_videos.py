@@ -168,7 +168,8 @@ def tile_videos(
     """Write one video with the rollouts tiled row by row; returns ``out``.
 
     Tiles take the first video's size (others are resized), ``columns`` defaults to a square
-    grid, ``border`` (pixels of green/red/white frame) to 1/20 of the tile's shorter side.
+    grid, ``border`` (pixels of green/red/white frame) to 1/16 of the tile's shorter side (at
+    least 4: H.264 stores colour at half resolution, thinner frames smear into the picture).
     """
     if not rollouts:
         raise ValueError("no rollouts to tile")
@@ -180,7 +181,7 @@ def tile_videos(
     columns = columns or math.ceil(math.sqrt(len(rollouts)))
     if columns < 1:
         raise ValueError(f"columns must be >= 1, got {columns}")
-    border = max(2, min(width, height) // 20) if border is None else border
+    border = max(4, min(width, height) // 16) if border is None else border
     rows = math.ceil(len(rollouts) / columns)
     cell_w, cell_h = width + 2 * border, height + 2 * border
     canvas_h, canvas_w = rows * cell_h, columns * cell_w

@@ -26,7 +26,7 @@ def record_with(steps, attrs):
     return _record
 
 
-def write_eval_output(root: Path, successes: dict[str, list[bool]], sizes=(64, 48)) -> Path:
+def _write_eval_output(root: Path, successes: dict[str, list[bool]], sizes=(64, 48)) -> Path:
     """What lerobot-eval leaves in its output dir: ``videos/<env>_<task>/eval_episode_K.mp4``
     (written with LeRobot's own write_video) and ``eval_info.json`` with per-task successes.
     Episode K of task T shows grey level 20 * K + 100 * T and lasts 6 + K frames."""
@@ -51,8 +51,14 @@ def write_eval_output(root: Path, successes: dict[str, list[bool]], sizes=(64, 4
 
 
 @pytest.fixture
+def write_eval_output():
+    """``write_eval_output(root, {"<env>_<task>": [success, ...]})``: a lerobot-eval output."""
+    return _write_eval_output
+
+
+@pytest.fixture
 def eval_output(tmp_path) -> Path:
     """Five rollouts of one task: successes 1 0 1 0 0."""
-    return write_eval_output(
+    return _write_eval_output(
         tmp_path / "eval", {"rmb_ur5e_insert_0": [True, False, True, False, False]}
     )
