@@ -100,7 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 for result in augmenter.run(regions):
                     written += 1
                     bar.set_postfix(
-                        region=result.region, reach_mm=f"{result.target_error_m * 1e3:.1f}"
+                        region=result.region, off_target_mm=f"{result.target_error_m * 1e3:.1f}"
                     )
                     bar.update()
     except (ValueError, RmbFormatError) as exc:
