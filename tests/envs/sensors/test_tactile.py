@@ -278,17 +278,14 @@ def test_lerobot_env_appends_the_grids_to_the_state():
 def test_recorded_episode_and_converted_dataset_carry_the_grids(tmp_path):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
+    from rmb_lerobot.cli.collect import main as rmb_collect
     from rmb_lerobot.converters import ConvertOptions, from_lerobot, to_lerobot
-    from rmb_lerobot.envs.collect import CollectConfig, collect
 
-    config = CollectConfig(
-        "pick", tmp_path / "rmb", episodes=1, world_idx=(0,), cameras=(), tactile=True
-    )
-    (result,) = collect(config)
-    assert result.success
-    with open_episode(result.path) as episode:
-        grids = {key: episode[key][:] for key in PADS}
-    assert all(g.shape == (result.steps, 5, 8) and g.any() for g in grids.values())
+    args = ["pick", "--episodes", "1", "--world-idx", "0", "--cameras", "--no-depth"]
+    assert rmb_collect([*args, "--out", str(tmp_path / "rmb"), "--tactile"]) == 0
+    with open_episode(tmp_path / "rmb" / "MujocoUR5ePick_world0_000.rmb") as episode:
+        steps, grids = len(episode), {key: episode[key][:] for key in PADS}
+    assert all(g.shape == (steps, 5, 8) and g.any() for g in grids.values())
 
     state_keys = (K.MEASURED_JOINT_POS, *PADS)  # as RMB's --state_keys selects them
     _, root = to_lerobot(
