@@ -95,3 +95,119 @@ def main(argv: Sequence[str]) -> None:
 
 if __name__ == "__main__":
     main(sys.argv[1:])
+
+
+# ------------------------------------------------------------------ GR00T N1.7, tiny and local
+QWEN_SPECIALS = (
+    "<|endoftext|>",
+    "<|im_start|>",
+    "<|im_end|>",
+    "<|vision_start|>",
+    "<|vision_end|>",
+    "<|image_pad|>",
+    "<|video_pad|>",
+)
+# A Qwen-style chat template: each image becomes vision_start, image_pad, vision_end.
+QWEN_CHAT_TEMPLATE = (
+    "{% for m in messages %}<|im_start|>{{ m['role'] }}\n"
+    "{% for c in m['content'] %}{% if c['type'] == 'image' %}"
+    "<|vision_start|><|image_pad|><|vision_end|>{% elif c['type'] == 'text' %}{{ c['text'] }}"
+    "{% endif %}{% endfor %}<|im_end|>\n{% endfor %}"
+)
+
+
+def build_qwen3_vl(directory: Path, texts: Sequence[str]) -> Path:
+    """A 2-layer, 64-wide Qwen3-VL config with its tokenizer (chat template, vision tokens),
+    image and video processors: what GR00T N1.7 fetches from ``nvidia/Cosmos-Reason2-2B``."""
+    from tokenizers import Tokenizer, models, pre_tokenizers, trainers
+    from transformers import PreTrainedTokenizerFast, Qwen2VLImageProcessor, Qwen3VLConfig
+    from transformers.models.qwen3_vl import Qwen3VLVideoProcessor
+
+    directory = Path(directory)
+    tokenizer = Tokenizer(models.WordLevel(unk_token="<unk>"))
+    tokenizer.pre_tokenizer = pre_tokenizers.Whitespace()
+    specials = [*QWEN_SPECIALS, "<unk>"]
+    tokenizer.train_from_iterator(
+        [*texts, "user assistant"], trainers.WordLevelTrainer(special_tokens=specials)
+    )
+    fast = PreTrainedTokenizerFast(
+        tokenizer_object=tokenizer, pad_token="<|endoftext|>", unk_token="<unk>"
+    )
+    fast.chat_template = QWEN_CHAT_TEMPLATE
+    fast.save_pretrained(directory)
+    ids = {token: fast.convert_tokens_to_ids(token) for token in QWEN_SPECIALS}
+    patch = 16
+    Qwen2VLImageProcessor(patch_size=patch, temporal_patch_size=2, merge_size=2).save_pretrained(
+        directory
+    )
+    Qwen3VLVideoProcessor(patch_size=patch, temporal_patch_size=2, merge_size=2).save_pretrained(
+        directory
+    )
+    Qwen3VLConfig(
+        image_token_id=ids["<|image_pad|>"],
+        video_token_id=ids["<|video_pad|>"],
+        vision_start_token_id=ids["<|vision_start|>"],
+        vision_end_token_id=ids["<|vision_end|>"],
+        tie_word_embeddings=True,
+        text_config={
+            "head_dim": 16,
+            "hidden_size": WIDTH,
+            "intermediate_size": 2 * WIDTH,
+            "num_attention_heads": 4,
+            "num_hidden_layers": 2,
+            "num_key_value_heads": 2,
+            "rope_scaling": {"mrope_interleaved": True, "mrope_section": [4, 2, 2]},
+            "vocab_size": VOCAB,
+            "tie_word_embeddings": True,
+        },
+        vision_config={
+            "deepstack_visual_indexes": [0],
+            "depth": 1,
+            "hidden_size": 32,
+            "intermediate_size": 64,
+            "num_heads": 2,
+            "out_hidden_size": WIDTH,
+            "patch_size": patch,
+            "spatial_merge_size": 2,
+            "temporal_patch_size": 2,
+        },
+    ).save_pretrained(directory)
+    return directory
+
+
+def build_groot_checkpoint(directory: Path, backbone: Path, action_horizon: int) -> Path:
+    """A raw GR00T N1.7 checkpoint (config.json without a LeRobot ``type``, weights) whose
+    backbone is ``backbone`` (:func:`build_qwen3_vl`) and whose action head is a 2-layer DiT."""
+    from lerobot.policies.groot.groot_n1_7 import GR00TN17, GR00TN17Config
+
+    heads = {"num_attention_heads": 4, "attention_head_dim": WIDTH // 4}
+    config = GR00TN17Config(
+        model_name=str(backbone),
+        backbone_model_type="qwen",
+        backbone_embedding_dim=WIDTH,
+        select_layer=2,
+        hidden_size=WIDTH,
+        input_embedding_dim=WIDTH,
+        action_horizon=action_horizon,
+        max_seq_len=256,
+        diffusion_model_cfg={
+            "positional_embeddings": None,
+            "num_layers": 2,
+            **heads,
+            "norm_type": "ada_norm",
+            "dropout": 0.0,
+            "final_dropout": True,
+            "output_dim": WIDTH,
+            "interleave_self_attention": True,
+        },
+        vl_self_attention_cfg={
+            "positional_embeddings": None,
+            "num_layers": 1,
+            **heads,
+            "dropout": 0.0,
+            "final_dropout": True,
+        },
+        state_dropout_prob=0.0,
+    )
+    GR00TN17(config, load_backbone_weights=False).save_pretrained(directory)
+    return Path(directory)
