@@ -1,5 +1,6 @@
-"""Tiny stand-ins for what LeRobot's VLAs download: a tokenizer built here, and pi0/pi05
-networks shrunk to a few thousand parameters per layer.
+"""Tiny stand-ins for what LeRobot's VLAs download: a tokenizer built here, pi0/pi05 networks
+shrunk to a few thousand parameters per layer, and a local GR00T N1.7 checkpoint with a tiny
+Qwen3-VL backbone (config, tokenizer with chat template, image/video processors).
 
 pi0's and pi05's sizes are not config fields: ``get_gemma_config`` maps the variant names
 (``gemma_2b``, ``gemma_300m``) to fixed widths and PaliGemma's SigLIP tower is built with its
