@@ -22,7 +22,7 @@ from rmb_lerobot import keys as K
 from rmb_lerobot.episode import find_episodes, open_episode
 from rmb_lerobot.errors import RmbFormatError
 
-_CHUNK = 32  # frames decoded per read
+_CHUNK = 8  # frames decoded per read
 
 
 def _jsonable(value: Any) -> Any:
