@@ -105,7 +105,8 @@ class RolloutServer:
     client. A Unix socket is created readable and writable by its owner only.
 
     Use it as a context manager (``with RolloutServer(...) as server: server.serve()``): the
-    socket is bound on entry and closed, with its file removed, on exit.
+    socket is bound on entry and closed, with its file removed, on exit. Call :meth:`serve` in
+    the thread that made the env (a MuJoCo env's OpenGL context belongs to that thread).
     """
 
     def __init__(
