@@ -1,14 +1,6 @@
-"""``rmb-data``: inspect, compare, refine, extend and view RMB episodes; tile rollout videos.
+"""rmb-data: inspect, compare, refine, extend and view RMB episodes; tile rollout videos.
 
-``rmb-data info PATH...``                 keys, shapes, dtypes, ranges, attributes (PrintRmbData)
-``rmb-data compare A B``                  differences against tolerances; exit 1 beyond them
-``rmb-data refine PATH... --task-desc T`` set the task description (RefineRmbData)
-``rmb-data add-pointcloud PATH... --camera C``  point clouds from depth (AddPointCloudToRmbData)
-``rmb-data view EPISODE``                 the episode in the rerun viewer (VisualizeData)
-``rmb-data tile-videos DIR --out FILE``   lerobot-eval's rollout videos tiled (TileRolloutVideos)
-
-Exit codes: 0 done, 1 ``compare`` found differences (or ``info`` met unreadable episodes),
-2 bad input (the message names the file and key), 128 + signal when interrupted.
+One command for RMB's data utilities (robo_manip_baselines/misc); see ``OVERVIEW``.
 """
 
 from __future__ import annotations
@@ -22,6 +14,19 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from rmb_lerobot.errors import RmbFormatError
+
+OVERVIEW = """\
+rmb-data info PATH...                     keys, shapes, dtypes, ranges, attributes (PrintRmbData)
+rmb-data compare A B                      differences against tolerances (CompareRmbData)
+rmb-data refine PATH... --task-desc TEXT  set the task description (RefineRmbData)
+rmb-data add-pointcloud PATH... --camera NAME   clouds from depth (AddPointCloudToRmbData)
+rmb-data view EPISODE                     the episode in the rerun viewer (VisualizeData)
+rmb-data tile-videos DIR --out FILE       lerobot-eval's rollout videos tiled (TileRolloutVideos)
+
+Exit codes: 0 done; 1 compare found differences beyond the tolerances, or info met
+unreadable episodes; 2 bad input (the message names the file and key); 128 + signal when
+interrupted (files being written are discarded, existing ones stay as they were).
+"""
 
 
 def _add_info(sub) -> None:
@@ -206,7 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rmb-data",
         description=__doc__.splitlines()[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="\n".join(__doc__.splitlines()[2:]),
+        epilog=OVERVIEW,
     )
     sub = parser.add_subparsers(dest="command", required=True)
     _add_info(sub)

@@ -123,3 +123,20 @@ def test_help_lists_every_subcommand():
     assert result.returncode == 0
     for command in ("info", "compare", "refine", "add-pointcloud", "view", "tile-videos"):
         assert command in result.stdout
+
+
+def test_interrupted_add_pointcloud_leaves_the_episode_as_it_was(
+    tmp_path, record, monkeypatch, capsys
+):
+    import h5py
+
+    path = record(tmp_path / "a.rmb")
+    before = {p.name: p.read_bytes() for p in path.iterdir()}
+
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt  # Ctrl-C while the new file is being written
+
+    monkeypatch.setattr(h5py.Group, "create_dataset", interrupt)
+    assert main(["add-pointcloud", str(path), "--camera", "front"]) == 130
+    assert "interrupted (SIGINT)" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in path.iterdir()} == before  # no temporaries either
