@@ -7,13 +7,16 @@ Usage::
         [--out outputs/learning]
 
 Collects ``--episodes`` expert demonstrations (worlds cycled 0..5, front + hand cameras 64x64
-with depth), converts them twice (RGB for act/mlp/sarnn; front depth for dp3), trains each
+with depth), converts them twice (RGB; front depth for dp3 and flow_policy), trains each
 policy with the unmodified ``lerobot-train`` within a bounded CPU budget (each recipe's steps x
 batch, about the same CPU time per policy; one torch thread per run, two runs side by side on
 two cores) and evaluates the last checkpoint
 with ``lerobot-eval`` ``--eval-episodes`` times in each world 0..5 (``--env.world_idx``).
 Prints a markdown table for benchmarks/RESULTS.md. Stages whose output exists are skipped, so
 an interrupted run resumes.
+
+The recipes and the command builders are ``rmb_lerobot.benchmark.recipes``, shared with
+``rmb-benchmark`` (the same cells over policies x tasks x seeds, on Ray, with the paper's tables).
 """
 
 from __future__ import annotations
@@ -23,87 +26,38 @@ import json
 import os
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 
-from rmb_lerobot.cli.quickstart import ACT_CPU_ARGS, Stage, run
+from rmb_lerobot.benchmark.recipes import (
+    RECIPES,
+    EnvInputs,
+    Recipe,
+    TrainSpec,
+    checkpoint_of,
+    collect_stage,
+    convert_stage,
+    eval_stage,
+    train_stage,
+)
+from rmb_lerobot.cli.quickstart import Stage, run
 from rmb_lerobot.envs.registry import entry_for
 
 WORLDS = range(6)
 SIZE = 64
 CAMERAS = ("front", "hand")
+SEED = 1
 
 
-@dataclass(frozen=True)
-class Recipe:
-    """How one policy is trained: its dataset (RGB or depth), its options, its env inputs, and
-    its budget (steps x batch), sized so that each run costs roughly the same CPU time."""
-
-    dataset: str
-    policy_args: tuple[str, ...]
-    env_args: tuple[str, ...]
-    steps: int = 1000
-    batch_size: int = 16
-
-
-RGB_ENV = (f"--env.cameras=[{','.join(CAMERAS)}]",)
-DEPTH_ENV = ("--env.cameras=[front]", "--env.depth=true")
-RECIPES = {
-    "act": Recipe("rgb", ACT_CPU_ARGS, RGB_ENV),  # the main job's ACT
-    "mlp": Recipe("rgb", ("--policy.optimizer_lr=1e-4",), RGB_ENV),
-    # A SARNN sample is a whole 21-frame window (RMB trains on sequences): 200 x 8 windows is
-    # about the CPU time of 1000 x 16 single frames for ACT or MLP on this machine.
-    "sarnn": Recipe("rgb", (), RGB_ENV, steps=200, batch_size=8),
-    "dp3": Recipe("depth", (), DEPTH_ENV),
-    "flow_policy": Recipe("depth", (), DEPTH_ENV),  # DP3's inputs and CPU-sized U-Net
-    # ManiFlow at its CPU size (the paper's 192 M parameters are for a GPU).
-    "maniflow": Recipe(
-        "rgb",
-        (
-            "--policy.n_layer=2",
-            "--policy.n_head=4",
-            "--policy.n_emb=64",
-            "--policy.resnet_width=16",
-        ),
-        RGB_ENV,
-    ),
-}
+def dataset_name(recipe: Recipe) -> str:
+    return "depth" if recipe.depth else "rgb"
 
 
 def data_stages(args: argparse.Namespace) -> list[Stage]:
-    entry = entry_for(args.env)
     rmb = args.out / "rmb"
-    collect = Stage(
-        "rmb-collect",
-        [
-            entry.rmb_env_name,
-            f"--episodes={args.episodes}",
-            f"--out={rmb}",
-            "--cameras",
-            *CAMERAS,
-            "--image-size",
-            str(SIZE),
-            str(SIZE),
-            "--success-only",
-            "--workers=2",
-        ],
-    )
-    rgb = Stage(
-        "rmb-convert",
-        ["to-lerobot", str(rmb), f"--output={args.out / 'rgb'}", "--repo-id=local/rgb"],
-    )
-    depth = Stage(
-        "rmb-convert",
-        [
-            "to-lerobot",
-            str(rmb),
-            f"--output={args.out / 'depth'}",
-            "--repo-id=local/depth",
-            "--depth",
-            "--camera-names",
-            "front",
-        ],
-    )
+    size = (SIZE, SIZE)
+    collect = collect_stage(args.env, rmb, args.episodes, CAMERAS, size, depth=True, workers=2)
+    rgb = convert_stage([rmb], args.out / "rgb", "local/rgb")
+    depth = convert_stage([rmb], args.out / "depth", "local/depth", cameras=["front"], depth=True)
     return [
         s
         for s, done in ((collect, rmb), (rgb, args.out / "rgb"), (depth, args.out / "depth"))
@@ -111,69 +65,52 @@ def data_stages(args: argparse.Namespace) -> list[Stage]:
     ]
 
 
-def env_args(args: argparse.Namespace, recipe: Recipe) -> list[str]:
-    entry = entry_for(args.env)
-    return [
-        f"--env.type={entry.lerobot_type}",
-        f"--env.image_width={SIZE}",
-        f"--env.image_height={SIZE}",
-        *recipe.env_args,
-    ]
+def env_inputs(args: argparse.Namespace, recipe: Recipe) -> EnvInputs:
+    return EnvInputs(args.env, recipe.cameras or CAMERAS, (SIZE, SIZE), depth=recipe.depth)
 
 
-def train_stage(args: argparse.Namespace, policy: str) -> Stage:
+def train_dir(args: argparse.Namespace, policy: str) -> Path:
+    return args.out / "train" / policy
+
+
+def train_stage_of(args: argparse.Namespace, policy: str) -> Stage:
     recipe = RECIPES[policy]
-    steps = args.steps or recipe.steps
-    return Stage(
-        "lerobot-train",
-        [
-            f"--dataset.repo_id=local/{recipe.dataset}",
-            f"--dataset.root={args.out / recipe.dataset}",
-            f"--policy.type={policy}",
-            *recipe.policy_args,
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            *env_args(args, recipe),
-            "--env_eval_freq=0",
-            f"--steps={steps}",
-            f"--batch_size={args.batch_size or recipe.batch_size}",
-            f"--save_freq={steps}",
-            f"--log_freq={max(1, steps // 20)}",
-            "--num_workers=0",
-            "--seed=1",
-            f"--output_dir={args.out / 'train' / policy}",
-            "--wandb.enable=false",
-        ],
+    name = dataset_name(recipe)
+    spec = TrainSpec(
+        policy_type=recipe.policy_type,
+        policy_args=recipe.policy_args,
+        steps=args.steps or recipe.steps,
+        batch_size=args.batch_size or recipe.batch_size,
+        dataset=args.out / name,
+        repo_id=f"local/{name}",
+        env=env_inputs(args, recipe),
+        output_dir=train_dir(args, policy),
+        seed=SEED,
     )
+    return train_stage(spec)
 
 
-def eval_stage(args: argparse.Namespace, policy: str, world: int) -> Stage:
-    checkpoint = args.out / "train" / policy / "checkpoints" / "last" / "pretrained_model"
-    return Stage(
-        "lerobot-eval",
-        [
-            f"--policy.path={checkpoint}",
-            "--policy.device=cpu",
-            *env_args(args, RECIPES[policy]),
-            f"--env.world_idx={world}",
-            f"--eval.n_episodes={args.eval_episodes}",
-            "--eval.batch_size=1",
-            f"--seed={1000 + world}",  # object shifts unseen in training
-            f"--output_dir={args.out / 'eval' / policy / f'world{world}'}",
-        ],
+def eval_stage_of(args: argparse.Namespace, policy: str, world: int) -> Stage:
+    return eval_stage(
+        checkpoint_of(train_dir(args, policy)),
+        env_inputs(args, RECIPES[policy]),
+        world,
+        args.eval_episodes,
+        1000 + world,  # object shifts unseen in training
+        args.out / "eval" / policy / f"world{world}",
     )
 
 
 def train_and_evaluate(args: argparse.Namespace, policy: str) -> dict:
     """One policy: train (unless its checkpoint exists), then evaluate in each world."""
     train_s = None
-    if not (args.out / "train" / policy / "checkpoints" / "last").exists():
-        train_s = run(train_stage(args, policy), 1, 1)
+    if not (train_dir(args, policy) / "checkpoints" / "last").exists():
+        train_s = run(train_stage_of(args, policy), 1, 1)
     per_world = []
     for world in WORLDS:
         info_path = args.out / "eval" / policy / f"world{world}" / "eval_info.json"
         if not info_path.exists():
-            run(eval_stage(args, policy, world), world + 1, len(WORLDS))
+            run(eval_stage_of(args, policy, world), world + 1, len(WORLDS))
         per_world.append(json.loads(info_path.read_text())["overall"]["pc_success"])
     return {"policy": policy, "train_s": train_s, "per_world": per_world}
 
