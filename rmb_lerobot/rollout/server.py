@@ -127,10 +127,12 @@ class RolloutServer:
         self.env = env
         self.policy = policy
         self.address = P.Address.parse(address) if isinstance(address, str) else address
-        limit = env_step_limit(env)
-        self.max_steps = min(x for x in (max_steps, limit) if x) if (max_steps or limit) else None
-        if self.max_steps is None:
+        limits = [x for x in (max_steps, env_step_limit(env)) if x is not None]
+        if not limits:
             raise ValueError("the env has no TimeLimit: give max_steps (--max-steps)")
+        if min(limits) < 1:
+            raise ValueError(f"max_steps must be at least 1, got {min(limits)}")
+        self.max_steps = min(limits)
         if episodes is not None and episodes < 1:
             raise ValueError(f"episodes must be at least 1, got {episodes}")
         self.episodes = episodes
@@ -151,14 +153,12 @@ class RolloutServer:
         self._listener: socket.socket | None = None
         self._socket_file: tuple[int, int] | None = None  # (st_dev, st_ino) of our socket file
         self._selector: selectors.BaseSelector | None = None
-        self._wake_r, self._wake_w = socket.socketpair()
-        self._wake_r.setblocking(False)
-        self._wake_w.setblocking(False)
         self._stop = threading.Event()
         self._connections: dict[socket.socket, _Connection] = {}
         self._episode: _Episode | None = None
         self._next_index = 0
         self._next_conn = 0
+        self._wake: tuple[socket.socket, socket.socket] | None = None  # stop() -> idle select
 
     # ------------------------------------------------------------------ lifecycle
     def __enter__(self) -> RolloutServer:
@@ -187,9 +187,12 @@ class RolloutServer:
             listener.close()
             raise
         self._listener = listener
+        self._wake = socket.socketpair()
+        for sock in self._wake:
+            sock.setblocking(False)
         self._selector = selectors.DefaultSelector()
         self._selector.register(listener, selectors.EVENT_READ, "listen")
-        self._selector.register(self._wake_r, selectors.EVENT_READ, "wake")
+        self._selector.register(self._wake[0], selectors.EVENT_READ, "wake")
         logger.info("listening on %s", self.address)
 
     def _bind_unix(self, listener: socket.socket) -> None:
@@ -218,8 +221,10 @@ class RolloutServer:
         """Make :meth:`serve` return soon (thread- and signal-safe): a running episode ends
         as ``aborted`` at the next step."""
         self._stop.set()
-        with contextlib.suppress(OSError):
-            self._wake_w.send(b"x")
+        wake = self._wake
+        if wake is not None:
+            with contextlib.suppress(OSError):
+                wake[1].send(b"x")
 
     def close(self) -> None:
         """Close every connection and the listener; remove the socket file if it is ours."""
@@ -237,7 +242,8 @@ class RolloutServer:
                 if (info.st_dev, info.st_ino) == self._socket_file:
                     self.address.path.unlink()
             self._socket_file = None
-        for sock in (self._wake_r, self._wake_w):
+        wake, self._wake = self._wake, None
+        for sock in wake or ():
             sock.close()
 
     # ------------------------------------------------------------------ main loop
@@ -266,7 +272,7 @@ class RolloutServer:
                 self._accept()
             elif key.data == "wake":
                 with contextlib.suppress(BlockingIOError):
-                    self._wake_r.recv(64)
+                    key.fileobj.recv(64)
             else:
                 self._read(key.data)
 
