@@ -292,6 +292,11 @@ def apply_overrides(
             if spec.get("rows", True):
                 narrowed[name] = spec
         raw["tables"] = narrowed or None
+    if not policies:
+        raise BenchmarkConfigError(
+            f"{source}: no policy of the config is left to run on tasks "
+            f"{overrides.get('tasks', raw.get('tasks'))} with policies {only or 'all'}"
+        )
     raw["policies"] = policies
     return raw
 

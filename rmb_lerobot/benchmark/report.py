@@ -311,8 +311,7 @@ def plot_heatmap(data: TableData, path: Path) -> None:
         dtype=float,
     ).reshape(len(data.labels), len(columns))
     fig, ax = plt.subplots(figsize=(1.3 * len(columns) + 2, 0.6 * len(data.labels) + 1.6))
-    cmap = plt.get_cmap("viridis").copy()
-    cmap.set_bad("#dddddd")  # failed or not run
+    cmap = plt.get_cmap("viridis").with_extremes(bad="#dddddd")  # grey: failed or not run
     image = ax.imshow(np.ma.masked_invalid(means), cmap=cmap, vmin=0, vmax=100, aspect="auto")
     ax.set_xticks(range(len(columns)), columns, rotation=30, ha="right")
     ax.set_yticks(range(len(data.labels)), data.labels)
