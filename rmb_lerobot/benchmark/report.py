@@ -193,18 +193,20 @@ def format_stat(stat: Stat | None, average: bool = False) -> str:
     text = f"{stat.mean:.1f}%" if average else f"{stat.mean:.0f}%"
     text += f" (±{stat.std:.0f})"
     if not stat.complete:
-        unit = "tasks" if average else "seeds"
-        text += f" [{stat.n_seeds}/{stat.n_expected} {unit}]"
+        if average and stat.n_seeds == stat.n_expected:
+            text += " [partial]"  # every task has a value, some from fewer seeds
+        else:
+            text += f" [{stat.n_seeds}/{stat.n_expected} {'tasks' if average else 'seeds'}]"
     return text
 
 
 def markdown_table(data: TableData) -> str:
-    """The table in the paper's layout; the best mean of each column in bold."""
+    """The table in the paper's layout; the best complete mean of each column in bold."""
     header = "| Policy \\ Task | " + " | ".join([*data.tasks, "Average"]) + " |"
     lines = [header, "|---|" + "---:|" * (len(data.tasks) + 1)]
     columns = list(zip(*data.stats, strict=True)) if data.stats else []
-    best = [
-        max((s.mean for s in column if s is not None and s.n_seeds), default=None)
+    best = [  # only complete cells compete: a partial average is not comparable
+        max((s.mean for s in column if s is not None and s.complete), default=None)
         for column in columns
     ]
     for label, stats in zip(data.labels, data.stats, strict=True):
@@ -212,7 +214,7 @@ def markdown_table(data: TableData) -> str:
         for index, stat in enumerate(stats):
             text = format_stat(stat, average=index == len(stats) - 1)
             top = best[index] is not None and len(data.labels) > 1
-            if top and stat is not None and stat.n_seeds and math.isclose(stat.mean, best[index]):
+            if top and stat is not None and stat.complete and math.isclose(stat.mean, best[index]):
                 text = f"**{text}**"
             cells.append(text)
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
@@ -238,7 +240,7 @@ def describe(config: BenchmarkConfig) -> str:
         f"{'s' * (config.eval_episodes != 1)} in each of worlds {worlds}. Average: mean over "
         "tasks of the task means (± population standard deviation across tasks), as the "
         f"paper's Table II. {config.demos} expert demos per task; [k/n] marks cells with "
-        "failed or missing runs (see results.jsonl)."
+        "failed or missing runs ([partial]: an average over such cells; see results.jsonl)."
     )
 
 
@@ -417,6 +419,8 @@ def plot_data_size(rows: Sequence[dict], path: Path) -> bool:
         xs, means, stds = _mean_std_by(points)
         _band(ax, xs, means, stds, task)
     for policy, ax in axes.items():
+        counts = sorted({d for (p, _), points in series.items() if p == policy for d, _ in points})
+        ax.set_xticks(counts)
         ax.set_title(policy)
         ax.set_xlabel("demos")
         ax.set_ylim(-2, 102)
