@@ -28,7 +28,10 @@ from lerobot.policies.pretrained import PreTrainedPolicy
 from safetensors.torch import load_file
 
 from rmb_lerobot.policies_extra.dp3 import DP3Policy
+from rmb_lerobot.policies_extra.flow_policy import FlowPolicy
+from rmb_lerobot.policies_extra.maniflow import ManiFlowPolicy
 from rmb_lerobot.policies_extra.mlp import MLPPolicy
+from rmb_lerobot.policies_extra.mt_act import MTACTPolicy
 from rmb_lerobot.policies_extra.sarnn import SARNNPolicy
 
 STATE_DIM = ACTION_DIM = 7
@@ -87,6 +90,41 @@ PLUGINS = {
             "--policy.n_action_steps=4",
             "--policy.camera_fovy=45",
             "--policy.scheduler_warmup_steps=0",  # full lr at once: every weight moves visibly
+        ),
+    ),
+    "flow_policy": Plugin(
+        FlowPolicy,
+        ("--policy.num_points=64", "--policy.down_dims=[32,64]", "--policy.camera_fovy=45"),
+    ),
+    # Image tokens (the default encoder); RGB only, like the MLP.
+    "maniflow": Plugin(
+        ManiFlowPolicy,
+        (
+            "--policy.n_layer=1",
+            "--policy.n_head=2",
+            "--policy.n_emb=32",
+            "--policy.resnet_width=16",
+            "--policy.horizon=8",
+            "--policy.n_action_steps=4",
+            "--policy.scheduler_warmup_steps=0",
+            f"--policy.input_features={MLP_INPUTS}",
+        ),
+    ),
+    # The task sentence comes from the dataset's task ("Follow the square.").
+    "mt_act": Plugin(
+        MTACTPolicy,
+        (
+            "--policy.dim_model=32",
+            "--policy.n_heads=2",
+            "--policy.dim_feedforward=64",
+            "--policy.n_encoder_layers=1",
+            "--policy.n_decoder_layers=1",
+            "--policy.n_vae_encoder_layers=1",
+            "--policy.latent_dim=8",
+            "--policy.chunk_size=4",
+            "--policy.n_action_steps=4",
+            "--policy.dropout=0",
+            f"--policy.input_features={MLP_INPUTS}",
         ),
     ),
 }
@@ -163,8 +201,10 @@ def accelerate_launch_lerobot_train(
 
 
 def first_observation(dataset: Path) -> dict[str, torch.Tensor]:
+    """The first frame as a batch of one, with its task sentence (MT-ACT needs it)."""
     frame = LeRobotDataset("local/ddp", root=dataset)[0]
-    return {key: value[None] for key, value in frame.items() if key.startswith("observation.")}
+    batch = {key: value[None] for key, value in frame.items() if key.startswith("observation.")}
+    return {**batch, "task": [frame["task"]]}
 
 
 @pytest.mark.parametrize("name", PLUGINS)
