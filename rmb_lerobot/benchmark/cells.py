@@ -169,7 +169,8 @@ def log_tail(log: Path, lines: int = TAIL_LINES) -> str:
     """The last ``lines`` lines of a log as a terminal would show them (progress-bar redraws,
     i.e. text before a carriage return, dropped)."""
     try:
-        text = log.read_text(errors="replace")
+        with open(log, errors="replace", newline="") as stream:  # keep the carriage returns
+            text = stream.read()
     except OSError as error:
         return f"(no log: {error})"
     shown = [line.rsplit("\r", 1)[-1] for line in text.split("\n")]

@@ -273,7 +273,8 @@ def apply_overrides(
             study = dict(study)
             if "tasks" in overrides:
                 _narrow(study, "tasks", {entry_for(t).name for t in _as_list(overrides["tasks"])})
-            _narrow(study, "policies", set(policies))
+            if only:
+                _narrow(study, "policies", set(policies))
             raw[key] = study
     tables = raw.get("tables")
     if isinstance(tables, Mapping) and (only or "tasks" in overrides):

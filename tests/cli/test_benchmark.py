@@ -1,0 +1,69 @@
+"""``rmb-benchmark``: dry runs, config errors, re-rendering a report (the grid itself runs in
+tests/benchmark/test_runner.py)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from rmb_lerobot.benchmark.report import RESULTS_FILE, write_jsonl
+from rmb_lerobot.cli.benchmark import main
+
+GRID_SMALL = Path(__file__).parents[2] / "benchmarks" / "grid_small.yaml"
+
+
+def test_dry_run_lists_every_cell_with_its_command(tmp_path):
+    script = Path(sys.executable).with_name("rmb-benchmark")
+    result = subprocess.run(
+        [str(script), str(GRID_SMALL), "--dry-run", "--out", str(tmp_path), "--tasks", "insert"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    # insert: 1 collect, 3 datasets (front+hand, front, hand), 6 trainings, 6 x 6 evaluations
+    assert lines[-1] == f"46 cells in {tmp_path}"
+    assert lines[0] == "[todo] collect/insert"
+    assert lines[1].startswith(f"    rmb-collect MujocoUR5eInsert --episodes=50 --out={tmp_path}")
+    assert "[todo] eval/insert/act_hand/seed0-n50/world5" in lines
+    assert not any("door" in line for line in lines)
+
+
+def test_a_bad_config_exits_2_naming_file_and_key(tmp_path, capsys):
+    path = tmp_path / "grid.yaml"
+    path.write_text("tasks: [insert]\npolicies:\n  act: {stpes: 10}\n")
+    assert main([str(path), "--dry-run"]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(f"rmb-benchmark: error: {path}: policies.act: unknown key(s) ['stpes']")
+    assert main([str(GRID_SMALL), "--policies", "pi0", "--dry-run"]) == 2
+    assert "--policies pi0: not in the config's policies" in capsys.readouterr().err
+
+
+def test_report_only_renders_the_results_of_a_directory(tmp_path, capsys):
+    rows = [
+        {
+            "policy": "act",
+            "task": "insert",
+            "seed": seed,
+            "demos": 50,
+            "world": world,
+            "status": "ok",
+            "n_successes": successes,
+            "n_episodes": 2,
+            "pc_success": 50.0 * successes,
+        }
+        for seed, successes in ((0, 2), (1, 1))
+        for world in range(6)
+    ]
+    write_jsonl(tmp_path / RESULTS_FILE, rows)
+    narrow = ["--tasks", "insert", "--policies", "act", "--seeds", "0", "1"]
+    code = main([str(GRID_SMALL), "--out", str(tmp_path), *narrow, "--report-only"])
+    assert code == 0
+    printed = capsys.readouterr().out.split()
+    assert printed[0] == str(tmp_path / "report" / "benchmark.md")
+    markdown = (tmp_path / "report" / "benchmark.md").read_text()
+    assert "| ACT | 75% (±35) | 75.0% (±0) |" in markdown  # Table II: seeds 100 % and 50 %
+    assert "| Front+Hand | 75% (±35) | 75.0% (±0) |" in markdown  # Table III: the same run
+    assert all(Path(p).exists() for p in printed)
