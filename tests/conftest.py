@@ -28,6 +28,18 @@ STEPS = 12
 
 
 @pytest.fixture
+def no_network(monkeypatch):
+    """Fail any attempt to open a network connection: tests make or ship the data they need."""
+    import socket
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a test tried to use the network")
+
+    monkeypatch.setattr(socket.socket, "connect", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+
+
+@pytest.fixture
 def steps() -> list[dict]:
     return list(ur5e_steps(STEPS, CAMERAS, SIZE, seed=1))
 

@@ -42,18 +42,6 @@ def converted_depth(demos, tmp_path_factory) -> Path:
 
 
 @pytest.fixture
-def no_network(monkeypatch):
-    """Fail any attempt to open a network connection."""
-    import socket
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a test tried to use the network")
-
-    monkeypatch.setattr(socket.socket, "connect", refuse)
-    monkeypatch.setattr(socket, "create_connection", refuse)
-
-
-@pytest.fixture
 def hidden_entries():
     """Names of hidden entries (staging directories) in a directory."""
 

@@ -81,17 +81,6 @@ def fake_hub(monkeypatch, tiny_groot):
     return asked
 
 
-@pytest.fixture
-def no_network(monkeypatch):
-    import socket
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a test tried to use the network")
-
-    monkeypatch.setattr(socket.socket, "connect", refuse)
-    monkeypatch.setattr(socket, "create_connection", refuse)
-
-
 def test_modality_json_follows_isaac_gr00ts_schema_and_covers_the_vectors(converted):
     info = json.loads((converted / "meta" / "info.json").read_text())
     modality = json.loads((converted / N.GR00T_MODALITY_PATH).read_text())

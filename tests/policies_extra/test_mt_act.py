@@ -198,18 +198,6 @@ def test_it_learns_task_dependent_actions_for_the_same_observation(features, obs
 BANANA = "Put the banana in the blue basket."
 
 
-@pytest.fixture
-def no_network(monkeypatch):
-    """Fail any attempt to open a network connection (the weights must come from the package)."""
-    import socket
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a test tried to use the network")
-
-    monkeypatch.setattr(socket.socket, "connect", refuse)
-    monkeypatch.setattr(socket, "create_connection", refuse)
-
-
 @pytest.fixture(scope="module")
 def minilm_config() -> MTACTConfig:
     pytest.importorskip("sentence_transformers", reason="the text extra is not installed")

@@ -41,17 +41,6 @@ def converted(tmp_path_factory, make_expert_dataset) -> Path:
 
 
 @pytest.fixture
-def no_network(monkeypatch):
-    import socket
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a test tried to use the network")
-
-    monkeypatch.setattr(socket.socket, "connect", refuse)
-    monkeypatch.setattr(socket, "create_connection", refuse)
-
-
-@pytest.fixture
 def local_tokenizers(monkeypatch, tmp_path):
     """The Hub's tokenizers replaced by one built here: records the names LeRobot asks for."""
     from lerobot.processor import tokenizer_processor
