@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python benchmarks/augmentation.py [--env insert] [--policy mlp] [--world 2]
-        [--samples 16] [--radius 0.04] [--duration 1.0] [--steps 600] [--batch-size 16]
+        [--samples 16] [--radius 0.04] [--duration 1.0] [--steps 300] [--batch-size 16]
         [--eval-episodes 3] [--out outputs/augmentation]
 
 One scripted demonstration in world ``--world`` (front + hand cameras 64x64, as
@@ -18,6 +18,7 @@ Prints a markdown table. Stages whose output exists are skipped, so an interrupt
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -139,12 +140,28 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=16, help="augmentations per region")
     parser.add_argument("--radius", type=float, default=0.04, help="metres, proposed regions")
     parser.add_argument("--duration", type=float, default=1.0, help="seconds per drive out")
-    parser.add_argument("--steps", type=int, default=600, help="training steps (both runs)")
+    parser.add_argument("--steps", type=int, default=300, help="training steps (both runs)")
     parser.add_argument("--batch-size", type=int, default=16)
     parser.add_argument("--eval-episodes", type=int, default=3, help="per world")
     parser.add_argument("--parallel", type=int, default=2, help="runs trained side by side")
+    parser.add_argument(
+        "--train-arg",
+        action="append",
+        default=[],
+        dest="policy_args",
+        metavar="ARG",
+        help="an extra lerobot-train option for both runs (repeatable; give it with '=', as "
+        "the option starts with '--'), e.g. --train-arg="
+        '\'--policy.normalization_mapping={"VISUAL": "MEAN_STD", "STATE": "IDENTITY", '
+        '"ACTION": "IDENTITY"}\'',
+    )
     parser.add_argument("--out", type=Path, default=Path("outputs/augmentation"))
     args = parser.parse_args()
+    if args.policy_args:  # the same recipe for both runs, with these options added
+        recipe = learning.RECIPES[args.policy]
+        learning.RECIPES[args.policy] = dataclasses.replace(
+            recipe, policy_args=(*recipe.policy_args, *args.policy_args)
+        )
 
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     start = time.perf_counter()
@@ -166,6 +183,8 @@ def main() -> None:
         f"{args.eval_episodes} eval episodes per world; "
         f"wall {(time.perf_counter() - start) / 60:.0f} min\n"
     )
+    if args.policy_args:
+        print("extra training options: " + " ".join(args.policy_args) + "\n")
     print(table(results, args))
 
 
