@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 from rmb_lerobot import keys as K
+from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.episode import switch_format
 from rmb_lerobot.errors import RmbFormatError
@@ -237,44 +237,35 @@ def _from_lerobot(args) -> None:
     print(f"wrote {len(written)} episodes to {args.output}")
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, unwinding like Ctrl-C: staged outputs are removed, nothing is half-written."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _raise_terminated(signum, frame) -> None:
-    raise Terminated(signum)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
-        if args.command == "switch-format":
-            out = switch_format(
-                args.src, args.dst, overwrite=args.overwrite, depth_codec=args.depth_codec
-            )
-            print(f"wrote {out}")
-        elif args.command == "to-lerobot":
-            _to_lerobot(args)
-        else:
-            _from_lerobot(args)
+        with sigterm_as_keyboard_interrupt():
+            _run(args)
     except (RmbFormatError, FileExistsError, ValueError) as exc:
         print(f"rmb-convert: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        signum = getattr(exc, "signum", signal.SIGINT)
-        name = signal.Signals(signum).name
+        signum = interrupted_signal(exc)
         kept = " (an existing destination is unchanged)" if getattr(args, "overwrite", 0) else ""
-        print(f"rmb-convert: interrupted ({name}); nothing was written{kept}", file=sys.stderr)
+        print(
+            f"rmb-convert: interrupted ({signum.name}); nothing was written{kept}", file=sys.stderr
+        )
         return 128 + signum
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def _run(args: argparse.Namespace) -> None:
+    if args.command == "switch-format":
+        out = switch_format(
+            args.src, args.dst, overwrite=args.overwrite, depth_codec=args.depth_codec
+        )
+        print(f"wrote {out}")
+    elif args.command == "to-lerobot":
+        _to_lerobot(args)
+    else:
+        _from_lerobot(args)
 
 
 if __name__ == "__main__":

@@ -8,11 +8,11 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 from rmb_lerobot.errors import RmbFormatError
 
 OVERVIEW = """\
@@ -331,35 +331,23 @@ _COMMANDS = {
 }
 
 
-class _Terminated(KeyboardInterrupt):
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _raise_terminated(signum, frame) -> None:
-    raise _Terminated(signum)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
-        return _COMMANDS[args.command](args)
+        with sigterm_as_keyboard_interrupt():
+            return _COMMANDS[args.command](args)
     except (RmbFormatError, FileExistsError, ValueError, ImportError) as exc:
         print(f"rmb-data {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        signum = getattr(exc, "signum", signal.SIGINT)
+        signum = interrupted_signal(exc)
         print(
-            f"rmb-data {args.command}: interrupted ({signal.Signals(signum).name}); "
+            f"rmb-data {args.command}: interrupted ({signum.name}); "
             "files being written were discarded, existing ones are unchanged",
             file=sys.stderr,
         )
         return 128 + signum
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":
