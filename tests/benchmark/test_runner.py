@@ -1,8 +1,9 @@
 """A tiny grid end to end on a local Ray: real rmb-collect, rmb-convert, lerobot-train and
 lerobot-eval cells, one of them failing on purpose; then resuming it.
 
-The grid: Insert, 2 demos (32x32 front camera), an MLP trained 2 steps, evaluated 1 episode of
-5 steps in worlds 0 and 1; and ``broken``, an MLP with an option LeRobot does not know, whose
+The grid: Insert, 2 demos (32x32 front camera), an MLP trained 2 steps (evaluated by
+lerobot-train after each step: a learning curve), evaluated 1 episode of 5 steps in worlds 0 and
+1; and ``broken``, an MLP with an option LeRobot does not know, whose
 training fails. The runs share one Ray session (module fixture) to pay its start-up once.
 """
 
@@ -14,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from rmb_lerobot.benchmark import load_config, run_benchmark
-from rmb_lerobot.benchmark.report import RESULTS_FILE, read_jsonl
+from rmb_lerobot.benchmark.report import CURVES_FILE, RESULTS_FILE, read_jsonl
 
 GRID = {
     "tasks": ["insert"],
@@ -26,6 +27,8 @@ GRID = {
     "image_size": [32, 32],
     "cameras": ["front"],
     "video_codec": "h264",
+    # lerobot-train evaluates the MLP after steps 1 and 2: the learning curve, from its log.
+    "learning_curve": {"eval_freq": 1, "eval_episodes": 1, "policies": ["mlp"]},
     "policies": {
         "mlp": {"steps": 2, "batch_size": 2},
         "broken": {"recipe": "mlp", "steps": 2, "batch_size": 2, "options": {"no_such": 1}},
@@ -71,7 +74,13 @@ def test_tiny_grid_runs_every_cell_and_writes_rows_and_report(grid):
     assert kinds == ["collect", "convert", "eval", "eval", "eval", "eval", "train", "train"]
     markdown = (out / "report" / "benchmark.md").read_text()
     assert "| mlp |" in markdown and "| broken | failed |" in markdown
-    for name in ("heatmap_policies.png", "bars_policies.png"):
+    curve = read_jsonl(out / CURVES_FILE)
+    assert [(c["policy"], c["step"], c["n_episodes"]) for c in curve] == [
+        ("mlp", 1, 1),
+        ("mlp", 2, 1),
+    ]
+    assert all(c["pc_success"] in (0.0, 100.0) for c in curve)
+    for name in ("heatmap_policies.png", "bars_policies.png", "learning_curves.png"):
         assert (out / "report" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
