@@ -9,6 +9,8 @@ goes on. The driver alone writes ``results.jsonl``, ``curves.jsonl`` and the rep
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import logging
 import os
@@ -34,6 +36,10 @@ from rmb_lerobot.benchmark.report import (
     short_error,
     write_jsonl,
 )
+
+
+class BenchmarkBusyError(RuntimeError):
+    """Another driver runs a grid in the same output directory."""
 
 
 @dataclass
@@ -95,6 +101,25 @@ def run_benchmark(
     echo = echo or (lambda line: tqdm.write(line))
     out = config.out.absolute()
     out.mkdir(parents=True, exist_ok=True)
+    with _exclusive(out):
+        return _run(config, out, ray_address, num_cpus, progress, echo)
+
+
+@contextlib.contextmanager
+def _exclusive(out: Path):
+    """One driver per output directory: a second one would run the same cells twice."""
+    with open(out / ".rmb-benchmark.lock", "w") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise BenchmarkBusyError(
+                f"another rmb-benchmark is running with --out {out}; wait for it or use "
+                "another output directory"
+            ) from None
+        yield
+
+
+def _run(config, out, ray_address, num_cpus, progress, echo) -> Summary:
     cells = plan(config)
     summary = Summary()
     results = summary.results

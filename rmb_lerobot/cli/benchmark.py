@@ -80,7 +80,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from rmb_lerobot.benchmark.cells import recorded
     from rmb_lerobot.benchmark.grid import plan
     from rmb_lerobot.benchmark.report import render_report, short_error
-    from rmb_lerobot.benchmark.runner import run_benchmark
+    from rmb_lerobot.benchmark.runner import BenchmarkBusyError, run_benchmark
 
     if args.dry_run:
         cells = plan(config)
@@ -104,6 +104,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rmb-benchmark: interrupted; finished cells are kept, run again to resume")
         return 130
+    except BenchmarkBusyError as error:
+        print(f"rmb-benchmark: error: {error}", file=sys.stderr)
+        return 2
     print(
         f"{len(summary.ran)} cells run, {len(summary.skipped)} done before, "
         f"{len(summary.failed)} failed"

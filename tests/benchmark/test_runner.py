@@ -9,6 +9,7 @@ training fails. The runs share one Ray session (module fixture) to pay its start
 
 from __future__ import annotations
 
+import fcntl
 import json
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import pytest
 
 from rmb_lerobot.benchmark import load_config, run_benchmark
 from rmb_lerobot.benchmark.report import CURVES_FILE, RESULTS_FILE, read_jsonl
+from rmb_lerobot.benchmark.runner import BenchmarkBusyError
 
 GRID = {
     "tasks": ["insert"],
@@ -121,3 +123,12 @@ def test_resume_skips_finished_cells_and_reruns_only_what_is_missing(grid):
     # The row of the re-run evaluation carries the training time recorded in the first run.
     row = next(r for r in read_jsonl(out / RESULTS_FILE) if (r["policy"], r["world"]) == ("mlp", 1))
     assert row["status"] == "ok" and row["train_s"] > 0
+
+
+def test_one_driver_per_output_directory(tmp_path):
+    config = load_config(None, {**GRID, "out": str(tmp_path)})
+    with open(tmp_path / ".rmb-benchmark.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)  # as a running driver holds it
+        with pytest.raises(BenchmarkBusyError, match="another rmb-benchmark is running"):
+            run_benchmark(config, progress=False)
+    assert not (tmp_path / "cells").exists()  # nothing started
