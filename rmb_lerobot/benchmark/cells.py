@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rmb_lerobot.benchmark.recipes import collect_covers
 from rmb_lerobot.cli.quickstart import Stage
 
 TAIL_LINES = 25
@@ -204,7 +205,11 @@ def recorded(cell: Cell) -> CellResult | None:
         return None  # unreadable: run it again
     if not cell.output.exists():
         return None  # its artefact was removed: run it again
-    if record.get("command") != cell.command():
+    command = record.get("command")
+    same = command == cell.command()
+    if not same and cell.kind == "collect" and isinstance(command, list):
+        same = collect_covers(command, cell.command())  # e.g. a grid of fewer policies
+    if not same:
         return CellResult(
             cell.id,
             cell.kind,

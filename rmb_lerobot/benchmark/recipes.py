@@ -151,6 +151,30 @@ def collect_stage(
     )
 
 
+def collect_covers(recorded: Sequence[str], needed: Sequence[str]) -> bool:
+    """Whether demos collected by the ``rmb-collect`` command ``recorded`` serve a grid that
+    needs ``needed``: the same command but for at least as many episodes, a superset of the
+    cameras, and depth if needed (the first N episodes of a collection do not depend on how many
+    follow, nor on which cameras are rendered)."""
+
+    def split(argv: Sequence[str]) -> tuple[list[str], set[str], bool, int] | None:
+        argv = list(argv)
+        try:
+            start, end = argv.index("--cameras") + 1, argv.index("--image-size")
+        except ValueError:
+            return None
+        episodes = [a for a in argv if a.startswith("--episodes=")]
+        if len(episodes) != 1:
+            return None
+        rest = [a for a in argv[:start] + argv[end:] if a not in (*episodes, "--no-depth")]
+        return rest, set(argv[start:end]), "--no-depth" not in argv, int(episodes[0].split("=")[1])
+
+    old, new = split(recorded), split(needed)
+    if old is None or new is None:
+        return False
+    return old[0] == new[0] and old[1] >= new[1] and (old[2] or not new[2]) and old[3] >= new[3]
+
+
 def convert_stage(
     sources: Sequence[Path],
     output: Path,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rmb_lerobot.benchmark.cells import recorded, write_record
 from rmb_lerobot.benchmark.config import parse_config
 from rmb_lerobot.benchmark.grid import plan
 
@@ -93,3 +94,27 @@ def test_train_and_eval_commands(tmp_path):
             eval_seeds.setdefault((key["policy"], key["task"], key["demos"]), []).append(seed)
     # Every (training seed, world) is evaluated on its own object shifts.
     assert all(len(set(seeds)) == len(seeds) == 4 for seeds in eval_seeds.values())
+
+
+def test_a_collection_serves_later_grids_that_need_no_more_of_it(tmp_path):
+    full = plan(config(tmp_path))["collect/insert"]
+    full.output.mkdir(parents=True)
+    write_record(full, 12.0, {})
+    # Fewer policies (fewer cameras, no depth), fewer demos: the same demos serve.
+    for narrower in (
+        config(tmp_path, policies=["act"]),
+        config(tmp_path, policies={"act": {"cameras": ["front"]}}, data_size=None),
+        config(tmp_path, demos=3, data_size=None),
+    ):
+        cell = plan(narrower)["collect/insert"]
+        assert cell.command() != full.command()
+        done = recorded(cell)
+        assert done.ok and done.skipped
+    # More demos, another camera or image size: refused, naming what to remove to redo it.
+    for wider in (
+        config(tmp_path, demos=8),
+        config(tmp_path, cameras=["front", "left"]),
+        config(tmp_path, image_size=[32, 32]),
+    ):
+        done = recorded(plan(wider)["collect/insert"])
+        assert not done.ok and "was done with another command" in done.error
