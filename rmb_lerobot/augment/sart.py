@@ -43,6 +43,7 @@ from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter, open_episode
 from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.errors import RmbFormatError
 from rmb_lerobot.pose import matrix_to_pose, pose_to_matrix
+from rmb_lerobot.staging import remove_stale
 
 logger = logging.getLogger(__name__)
 
@@ -361,7 +362,17 @@ class Augmenter:
         """Write N episodes per region, yielding each as it is written."""
         for i, region in enumerate(regions):
             region.check(self.length, path=self.demo_path, where=f"regions[{i}]")
+        if not self.config.overwrite:
+            for region_idx in range(len(regions)):
+                for sample_idx in range(self.config.samples_per_region):
+                    path = self.episode_path(region_idx, sample_idx)
+                    if path.exists():
+                        raise RmbFormatError(
+                            "destination exists (use overwrite / --overwrite to replace it)",
+                            path=path,
+                        )
         self.out.mkdir(parents=True, exist_ok=True)
+        remove_stale(self.out)  # temporaries of killed runs; a live run's stay
         for region_idx, region in enumerate(regions):
             end_idx = region.end_idx
             for sample_idx, target in enumerate(self.sample_targets(region, region_idx)):

@@ -155,3 +155,16 @@ def test_a_region_past_the_demo_is_refused_before_anything_is_written(insert_dem
     ):
         list(augmenter.run([Region(time_idx=10_000, radius=0.02)]))
     assert not (tmp_path / "out").exists()
+
+
+def test_existing_episodes_are_kept_unless_overwrite_is_asked(insert_demo, augmented, tmp_path):
+    results, _, _ = augmented
+    out = results[0].path.parent
+    before = results[0].path.stat().st_mtime_ns
+    config = AugmentConfig(samples_per_region=1, duration_s=DURATION_S, seed=3)
+    with (
+        Augmenter("insert", insert_demo, out, config) as augmenter,
+        pytest.raises(RmbFormatError, match="destination exists"),
+    ):
+        list(augmenter.run([REGION]))
+    assert results[0].path.stat().st_mtime_ns == before
