@@ -122,12 +122,15 @@ def is_wrist_camera(camera: str) -> bool:
 def camera_rename_map(cameras: list[str], policy: str) -> dict[str, str]:
     """Dataset image keys -> the checkpoint's camera slots (``--rename_map``).
 
-    Scene cameras (``front``, ``left``, ...) come first, then wrist cameras, each group in the
-    dataset's order; pi0/pi05 put the first scene camera in ``base_0_rgb`` and the wrist
-    cameras in ``left_wrist_0_rgb`` then ``right_wrist_0_rgb`` (RMB's dual arms list ``left``
-    first); SmolVLA fills ``camera1..3`` in that order. Cameras beyond the slots are not
-    renamed, so the policy does not see them; empty slots are masked by the policies. GR00T
-    takes the dataset's names: an empty map.
+    The first scene camera (``front``, ``left``, ...) comes first, then the wrist cameras, then
+    the other scene cameras, each group in the dataset's order. pi0/pi05 put the first scene
+    camera in ``base_0_rgb`` and the wrist cameras in ``left_wrist_0_rgb`` then
+    ``right_wrist_0_rgb`` (RMB's dual arms list ``left`` first); SmolVLA fills ``camera1..3``
+    in the same order (scene, wrist, then a second wrist or scene camera), so all three see the
+    same cameras and a dataset recorded with every scene camera still gives SmolVLA its wrist
+    view. Cameras beyond the slots are not renamed, so the policy does not see them; pi0/pi05
+    mask their empty slots, SmolVLA leaves them out (``--policy.empty_cameras=N`` adds N blank,
+    masked ones). GR00T takes the dataset's names: an empty map.
     """
     recipe = _recipe(policy)
     if not recipe.camera_slots:
@@ -140,7 +143,7 @@ def camera_rename_map(cameras: list[str], policy: str) -> dict[str, str]:
         pairs = list(zip(scene[:1], recipe.camera_slots[:1], strict=False))
         pairs += list(zip(wrist, recipe.camera_slots[1:], strict=False))
     else:
-        pairs = list(zip(scene + wrist, recipe.camera_slots, strict=False))
+        pairs = list(zip(scene[:1] + wrist + scene[1:], recipe.camera_slots, strict=False))
     return {N.image_key(camera): slot for camera, slot in pairs}
 
 

@@ -1,6 +1,7 @@
 """Tiny stand-ins for what LeRobot's VLAs download: a tokenizer built here, pi0/pi05 networks
 shrunk to a few thousand parameters per layer, and a local GR00T N1.7 checkpoint with a tiny
-Qwen3-VL backbone (config, tokenizer with chat template, image/video processors).
+Qwen3-VL backbone (config, tokenizer with chat template, image/video processors), and a tiny
+SmolVLM2 with a stand-in ``lerobot/smolvla_base`` around it for SmolVLA.
 
 pi0's and pi05's sizes are not config fields: ``get_gemma_config`` maps the variant names
 (``gemma_2b``, ``gemma_300m``) to fixed widths and PaliGemma's SigLIP tower is built with its
@@ -212,3 +213,143 @@ def build_groot_checkpoint(directory: Path, backbone: Path, action_horizon: int)
     )
     GR00TN17(config, load_backbone_weights=False).save_pretrained(directory)
     return Path(directory)
+
+
+# ------------------------------------------------------------------ SmolVLA, tiny and local
+SMOLVLM_SPECIALS = {  # the named special tokens of SmolVLM2's tokenizer (extra_special_tokens)
+    "fake_image_token": "<fake_token_around_image>",
+    "image_token": "<image>",
+    "global_image_token": "<global-img>",
+    "end_of_utterance_token": "<end_of_utterance>",
+    "video_token": "<video>",
+}
+SMOLVLM_CHAT_TEMPLATE = (
+    "<|im_start|>{% for m in messages %}{{ m['role'] | capitalize }}: "
+    "{% for c in m['content'] %}{% if c['type'] == 'text' %}{{ c['text'] }}"
+    "{% elif c['type'] == 'image' %}<image>{% endif %}{% endfor %}<end_of_utterance>\n"
+    "{% endfor %}{% if add_generation_prompt %}Assistant:{% endif %}"
+)
+
+
+def build_smolvlm(directory: Path, texts: Sequence[str]) -> Path:
+    """A tiny SmolVLM2 saved as ``HuggingFaceTB/SmolVLM2-500M-Video-Instruct`` is laid out:
+    config (2-layer, 64-wide Llama text model; 1-layer, 32-wide SigLIP tower on 512x512 images
+    in 32-pixel patches; pixel-shuffle scale 4, so 16 tokens per image), random weights, image
+    and video processors, and a WordLevel tokenizer with SmolVLM's named image tokens (SmolVLA
+    reads ``fake_image_token_id`` / ``global_image_token_id`` from it)."""
+    from tokenizers import Tokenizer, models, pre_tokenizers, trainers
+    from transformers import (
+        PreTrainedTokenizerFast,
+        SmolVLMConfig,
+        SmolVLMForConditionalGeneration,
+        SmolVLMImageProcessor,
+        SmolVLMProcessor,
+    )
+    from transformers.models.smolvlm import SmolVLMVideoProcessor
+
+    directory = Path(directory)
+    tokenizer = Tokenizer(models.WordLevel(unk_token="<unk>"))
+    tokenizer.pre_tokenizer = pre_tokenizers.Whitespace()
+    specials = ["<|endoftext|>", "<|im_start|>", "<unk>", *SMOLVLM_SPECIALS.values()]
+    tokenizer.train_from_iterator(
+        [*texts, "User Assistant"], trainers.WordLevelTrainer(special_tokens=specials)
+    )
+    assert tokenizer.get_vocab_size() < VOCAB
+    fast = PreTrainedTokenizerFast(
+        tokenizer_object=tokenizer,
+        bos_token="<|im_start|>",
+        eos_token="<end_of_utterance>",
+        pad_token="<|endoftext|>",
+        unk_token="<unk>",
+        extra_special_tokens=dict(SMOLVLM_SPECIALS),
+    )
+    image_size, patch, scale = 512, 32, 4
+    image_processor = SmolVLMImageProcessor(
+        do_image_splitting=False,
+        max_image_size={"longest_edge": image_size},
+        size={"longest_edge": image_size},
+    )
+    video_processor = SmolVLMVideoProcessor(
+        max_image_size={"longest_edge": image_size}, size={"longest_edge": image_size}
+    )
+    processor = SmolVLMProcessor(
+        image_processor,
+        fast,
+        video_processor,
+        image_seq_len=(image_size // patch) ** 2 // scale**2,
+        chat_template=SMOLVLM_CHAT_TEMPLATE,
+    )
+    processor.save_pretrained(directory)
+    config = SmolVLMConfig(
+        image_token_id=fast.convert_tokens_to_ids(SMOLVLM_SPECIALS["image_token"]),
+        pad_token_id=fast.pad_token_id,
+        scale_factor=scale,
+        vision_config={
+            "hidden_size": 32,
+            "intermediate_size": 64,
+            "num_hidden_layers": 1,
+            "num_attention_heads": 2,
+            "image_size": image_size,
+            "patch_size": patch,
+        },
+        text_config={
+            "model_type": "llama",
+            "hidden_size": WIDTH,
+            "intermediate_size": 2 * WIDTH,
+            "num_hidden_layers": 2,
+            "num_attention_heads": 4,
+            "num_key_value_heads": 2,
+            "head_dim": 16,
+            "vocab_size": VOCAB,
+            "pad_token_id": fast.pad_token_id,
+        },
+    )
+    SmolVLMForConditionalGeneration(config).save_pretrained(directory)
+    return directory
+
+
+def build_smolvla_base(directory: Path, backbone: Path, backbone_name: str) -> Path:
+    """A stand-in for ``lerobot/smolvla_base``: its config (camera slots ``camera1..3`` at
+    256x256, 6-d state and action, chunk 50, ``load_vlm_weights``, the 16-layer cut, cross
+    attention every other layer, 0.75-wide expert, language padded to 48 tokens) around the
+    tiny SmolVLM at ``backbone``, saved with its pre/post-processors and ``backbone_name`` (the
+    Hub id) as the VLM and tokenizer name, exactly where the real checkpoint names it."""
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.factory import make_pre_post_processors
+    from lerobot.policies.smolvla import SmolVLAConfig, SmolVLAPolicy
+    from lerobot.processor import TokenizerProcessorStep
+
+    cameras = {
+        f"observation.images.camera{i}": PolicyFeature(FeatureType.VISUAL, (3, 256, 256))
+        for i in (1, 2, 3)
+    }
+    config = SmolVLAConfig(
+        input_features={**cameras, "observation.state": PolicyFeature(FeatureType.STATE, (6,))},
+        output_features={"action": PolicyFeature(FeatureType.ACTION, (6,))},
+        vlm_model_name=str(backbone),
+        load_vlm_weights=True,
+        pad_language_to="max_length",
+        prefix_length=0,
+        num_expert_layers=0,
+        device="cpu",
+    )
+    policy = SmolVLAPolicy(config)
+    pre, post = make_pre_post_processors(config, dataset_stats={})
+    config.vlm_model_name = backbone_name
+    (tokenizer_step,) = [s for s in pre.steps if isinstance(s, TokenizerProcessorStep)]
+    tokenizer_step.tokenizer_name = backbone_name
+    for part in (policy, pre, post):
+        part.save_pretrained(directory)
+    return Path(directory)
+
+
+def seed_hub_cache(cache: Path, repo_id: str, files: Path) -> None:
+    """Put ``files`` in a Hugging Face cache (``HF_HUB_CACHE``) as the snapshot of model
+    ``repo_id``, where an offline ``from_pretrained(repo_id)`` finds it."""
+    import shutil
+
+    repo = Path(cache) / f"models--{repo_id.replace('/', '--')}"
+    revision = "0" * 40
+    shutil.copytree(files, repo / "snapshots" / revision)
+    (repo / "refs").mkdir()
+    (repo / "refs" / "main").write_text(revision)
