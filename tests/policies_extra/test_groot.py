@@ -17,7 +17,6 @@ import importlib.util
 import itertools
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -146,15 +145,6 @@ def test_a_training_step_and_actions_through_lerobots_factories(converted, fake_
     assert action.shape == (1, 7) and torch.isfinite(action).all()
 
 
-def seed_hub_cache(cache: Path, repo_id: str, files: Path) -> None:
-    """Put ``files`` in a Hugging Face cache as the snapshot of model ``repo_id``."""
-    repo = cache / f"models--{repo_id.replace('/', '--')}"
-    revision = "0" * 40
-    shutil.copytree(files, repo / "snapshots" / revision)
-    (repo / "refs").mkdir()
-    (repo / "refs" / "main").write_text(revision)
-
-
 def test_lerobot_train_runs_the_recipe_with_the_hub_replaced_by_a_local_cache(
     converted, tiny_groot, tmp_path
 ):
@@ -162,7 +152,7 @@ def test_lerobot_train_runs_the_recipe_with_the_hub_replaced_by_a_local_cache(
     offline, its Hugging Face cache holding the tiny models under those ids."""
     cache = tmp_path / "hub"
     for repo_id, files in tiny_groot.items():
-        seed_hub_cache(cache, repo_id, files)
+        tiny_vla.seed_hub_cache(cache, repo_id, files)
     out = tmp_path / "train"
     args = vla.train_args(converted, "groot")
     args = [a for a in args if not a.startswith(("--policy.chunk_size", "--policy.n_action"))]
