@@ -21,14 +21,21 @@ from rmb_lerobot.benchmark.config import BenchmarkConfigError, load_config
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rmb-benchmark",
-        description=__doc__.split("\n\n")[0].split(": ", 1)[1],
+        description="The paper's policies x tasks x seeds x worlds grid, on Ray: rmb-collect, "
+        "rmb-convert, lerobot-train and lerobot-eval cells; results.jsonl and report/ in --out.",
         epilog="Options given here override the config file's keys. Local Ray by default (all "
         "CPUs of this machine, no dashboard); --ray-address joins a running cluster, where --out "
         "must be a path every node sees (a shared filesystem), with this package installed on "
         "every node. Exit status: 0 all cells succeeded, 1 some failed (see the report), 2 a "
         "bad config.",
     )
-    parser.add_argument("config", nargs="?", type=Path, help="YAML or JSON grid (see docs)")
+    parser.add_argument(
+        "config",
+        nargs="?",
+        type=Path,
+        help="YAML or JSON grid, e.g. benchmarks/grid_small.yaml "
+        "(keys: rmb_lerobot/benchmark/config.py)",
+    )
     grid = parser.add_argument_group("grid (override the config)")
     grid.add_argument("--out", type=Path, help="output directory (shared path on a cluster)")
     grid.add_argument("--policies", nargs="+", help="run only these policies of the config")
