@@ -129,8 +129,8 @@ def _run(config, out, ray_address, num_cpus, progress, echo) -> Summary:
             if done.ok:
                 ups = [results[u] for u in cell.upstream if u in results and results[u].ok]
                 done.durations = {**merged_durations(ups), **done.durations}
-            results[cell.id] = done
-            summary.skipped.append(cell.id)
+                summary.skipped.append(cell.id)
+            results[cell.id] = done  # done, or refused: recorded for another command
     needed = _needed(cells, results)
     if needed:
         ray = import_ray()
