@@ -14,6 +14,8 @@ import fcntl
 import json
 import logging
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -73,6 +75,9 @@ def init_ray(address: str | None = None, num_cpus: int | None = None, num_gpus: 
     if ray.is_initialized():
         return ray
     quiet = {"log_to_driver": False, "logging_level": logging.ERROR, "configure_logging": True}
+    # Ray's driver replaces the SIGTERM handler with its own (log and exit 1); a handler the
+    # caller installed (the CLI's: unwind like Ctrl-C, cancelling running cells) comes back.
+    caller_handler = signal.getsignal(signal.SIGTERM)
     if address:
         ray.init(address=address, **quiet)
     else:
@@ -82,6 +87,8 @@ def init_ray(address: str | None = None, num_cpus: int | None = None, num_gpus: 
             include_dashboard=False,
             **quiet,
         )
+    if callable(caller_handler) and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, caller_handler)
     return ray
 
 

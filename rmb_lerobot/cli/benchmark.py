@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from rmb_lerobot.benchmark.config import BenchmarkConfigError, load_config
+from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -102,15 +103,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(path)
         return 0
     try:
-        summary = run_benchmark(
-            config,
-            ray_address=args.ray_address,
-            num_cpus=args.num_cpus,
-            progress=not args.no_progress,
+        with sigterm_as_keyboard_interrupt():  # a kill cancels running commands like Ctrl-C
+            summary = run_benchmark(
+                config,
+                ray_address=args.ray_address,
+                num_cpus=args.num_cpus,
+                progress=not args.no_progress,
+            )
+    except KeyboardInterrupt as exc:
+        signum = interrupted_signal(exc)
+        print(
+            f"rmb-benchmark: interrupted ({signum.name}); finished cells are kept, "
+            "run again to resume"
         )
-    except KeyboardInterrupt:
-        print("rmb-benchmark: interrupted; finished cells are kept, run again to resume")
-        return 130
+        return 128 + signum
     except BenchmarkBusyError as error:
         print(f"rmb-benchmark: error: {error}", file=sys.stderr)
         return 2

@@ -19,13 +19,19 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
+_received: list[int] = []  # the SIGTERMs seen inside the block (a library may re-raise the
+# interrupt as a plain KeyboardInterrupt, e.g. Ray's ray.get)
+
+
 def _raise_terminated(signum, frame) -> None:
+    _received.append(signum)
     raise Terminated(signum)
 
 
 @contextmanager
 def sigterm_as_keyboard_interrupt() -> Iterator[None]:
     """Within the block SIGTERM raises :class:`Terminated`; the previous handler comes back."""
+    _received.clear()
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         yield
@@ -34,5 +40,6 @@ def sigterm_as_keyboard_interrupt() -> Iterator[None]:
 
 
 def interrupted_signal(exc: KeyboardInterrupt) -> signal.Signals:
-    """The signal behind an interrupt: SIGTERM for :class:`Terminated`, else SIGINT (Ctrl-C)."""
-    return signal.Signals(getattr(exc, "signum", signal.SIGINT))
+    """The signal behind an interrupt: SIGTERM for :class:`Terminated` (or when one arrived in
+    the block), else SIGINT (Ctrl-C)."""
+    return signal.Signals(getattr(exc, "signum", _received[-1] if _received else signal.SIGINT))

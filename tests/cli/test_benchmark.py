@@ -67,3 +67,36 @@ def test_report_only_renders_the_results_of_a_directory(tmp_path, capsys):
     assert "| ACT | 75% (±35) | 75.0% (±0) |" in markdown  # Table II: seeds 100 % and 50 %
     assert "| Front+Hand | 75% (±35) | 75.0% (±0) |" in markdown  # Table III: the same run
     assert all(Path(p).exists() for p in printed)
+
+
+def test_sigterm_stops_the_running_cells_and_keeps_the_grid_resumable(tmp_path):
+    """A ``kill`` acts like Ctrl-C: the running collection is cancelled, the driver exits 143,
+    and nothing is recorded as done (a later run starts that cell again)."""
+    import json
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "out"
+    config = tmp_path / "grid.json"
+    grid = {"tasks": ["insert"], "demos": 500, "worlds": [0], "cameras": ["front"]}
+    config.write_text(json.dumps({**grid, "image_size": [32, 32], "policies": {"mlp": {}}}))
+    command = [sys.executable, "-m", "rmb_lerobot.cli.benchmark", str(config), "--out", str(out)]
+    driver = subprocess.Popen(
+        [*command, "--num-cpus", "1", "--no-progress"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "OMP_NUM_THREADS": "1"},
+    )
+    collect_log = out / "logs" / "collect" / "insert.log"
+    deadline = time.monotonic() + 120
+    while not (collect_log.exists() and collect_log.stat().st_size) and driver.poll() is None:
+        assert time.monotonic() < deadline, "the collection never started"
+        time.sleep(0.5)
+    driver.send_signal(signal.SIGTERM)
+    output, _ = driver.communicate(timeout=120)
+
+    assert driver.returncode == 128 + signal.SIGTERM, output
+    assert "interrupted (SIGTERM)" in output
+    assert not (out / "cells" / "collect" / "insert.json").exists()  # not recorded as done
