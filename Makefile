@@ -17,13 +17,14 @@ VENV := .venv
 EXTRAS := --extra vla --extra text --extra benchmark --extra viz
 STAMP := $(VENV)/.synced
 
-.PHONY: help setup demo test lint format bench bench-learning clean
+.PHONY: help setup demo test lint format bench bench-learning bench-grid clean
 
 help:
 	@echo "make demo   - the main job (quick start)"
 	@echo "make test   - lint + the test suite"
 	@echo "make bench  - benchmarks (results go to benchmarks/RESULTS.md by hand)"
 	@echo "make bench-learning - train and evaluate every policy from scripted demos (about 1 h+)"
+	@echo "make bench-grid - the benchmark grid of benchmarks/grid_small.yaml on local Ray (hours)"
 
 # Re-sync whenever the lock or the project metadata changes.
 $(STAMP): pyproject.toml uv.lock .python-version
@@ -59,6 +60,9 @@ bench: $(STAMP)
 
 bench-learning: $(STAMP)
 	$(VENV)/bin/python benchmarks/learning.py
+
+bench-grid: $(STAMP)
+	$(VENV)/bin/rmb-benchmark benchmarks/grid_small.yaml
 
 clean:
 	rm -rf outputs .pytest_cache
