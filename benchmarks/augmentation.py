@@ -176,7 +176,7 @@ def main() -> None:
         results = dict(zip(CONDITIONS, outcomes, strict=True))
     recipe = learning.RECIPES[args.policy]
     print(
-        f"\n{args.policy} ({args.steps} x {args.batch_size}, {recipe.dataset} "
+        f"\n{args.policy} ({args.steps} x {args.batch_size}, {learning.dataset_name(recipe)} "
         f"{'+'.join(learning.CAMERAS)} {learning.SIZE}x{learning.SIZE}) on "
         f"{entry_for(args.env).rmb_env_name}: 1 demo in world {args.world} vs + "
         f"{args.samples} SART samples per proposed region (radius {args.radius} m); "
