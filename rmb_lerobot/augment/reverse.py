@@ -18,7 +18,9 @@ key of an RMB episode has to be reversed in the way its meaning dictates:
 * commands (``command_*``): a command leads the state it produces. Forward, the command sent at
   step ``t`` is reached about ``lag`` steps later; played backwards the same pairing needs the
   command ``2 * lag`` steps further along the reversed recording, so command keys are reversed
-  and then advanced by ``command_shift`` steps (held at the last value where they run out).
+  and then advanced by ``command_shift`` steps (held at the last value where they run out:
+  :class:`~rmb_lerobot.augment.sart.Augmenter` replaces those frames with the demo's own
+  commands when it joins the reversed motion to the demo).
   ``command_joint_vel`` is ``(command[t] - command[t-1]) / dt`` in RMB's simulated recorders, so
   it is reversed like a relative key; velocity commands (``command_eef_vel``,
   ``command_mobile_omni_vel``) are instantaneous and reversed like measured velocities;

@@ -11,10 +11,12 @@ For each acceptable region (:mod:`rmb_lerobot.augment.regions`) and each of N sa
    drive the tool there in ``duration`` seconds (geodesic SE(3) interpolation with a smooth
    start and stop, solved by the env's IK) while recording every RMB key the env records;
 3. play that recording backwards (:func:`~rmb_lerobot.augment.reverse.reverse_recording`; the
-   command keys advanced by twice the controller lag measured in the demo), append the
-   rest of the demonstration after the convergence step, renumber ``time``, recompute the
-   relative keys at the join, and write a complete RMB episode atomically with
-   :class:`~rmb_lerobot.EpisodeWriter`.
+   command keys advanced by twice the controller lag measured in the demo), drop its last
+   frames where they retrace the arm's carry-on along the demo (:meth:`Augmenter.find_join`),
+   give the frames whose advanced commands ran out the demo's own commands from the
+   convergence step up to the join step, append the rest of the demonstration after the join
+   step, renumber ``time``, recompute the relative keys over the join, and write a complete
+   RMB episode atomically with :class:`~rmb_lerobot.EpisodeWriter`.
 
 The first frame of each episode is the perturbed pose; its last part is the demonstration.
 
@@ -51,6 +53,7 @@ __all__ = [
     "AugmentConfig",
     "Augmenter",
     "SampleResult",
+    "demo_at",
     "estimate_lag",
     "propose_demo_regions",
     "sample_rotation",
@@ -78,6 +81,27 @@ def sample_rotation(rng: np.random.Generator, max_angle: float) -> np.ndarray:
     axis /= max(np.linalg.norm(axis), 1e-12)
     angle = rng.uniform(-max_angle, max_angle)
     return Rotation.from_rotvec(axis * angle).as_matrix()
+
+
+def demo_at(values: np.ndarray, tau: np.ndarray, *, pose: bool = False) -> np.ndarray:
+    """``values`` (step-major) at fractional steps ``tau``: linear between neighbouring steps;
+    for eef poses (7 numbers per eef, position + wxyz quaternion) the quaternions are
+    interpolated on the short arc and normalised."""
+    values = np.asarray(values, dtype=np.float64)
+    tau = np.clip(np.asarray(tau, dtype=np.float64), 0, len(values) - 1)
+    low = np.minimum(np.floor(tau).astype(int), len(values) - 1)
+    high = np.minimum(low + 1, len(values) - 1)
+    w = (tau - low)[:, None]
+    a, b = values[low], values[high]
+    if not pose:
+        return (1 - w) * a + w * b
+    a = a.reshape(len(tau), -1, 7)
+    b = b.reshape(len(tau), -1, 7).copy()
+    flip = np.sum(a[..., 3:] * b[..., 3:], axis=-1) < 0
+    b[..., 3:][flip] *= -1
+    out = (1 - w[..., None]) * a + w[..., None] * b
+    out[..., 3:] /= np.linalg.norm(out[..., 3:], axis=-1, keepdims=True)
+    return out.reshape(len(tau), -1)
 
 
 def estimate_lag(command: np.ndarray, measured: np.ndarray, max_lag: int = 20) -> int:
@@ -118,10 +142,12 @@ class SampleResult:
     sample: int
     path: Path
     steps: int  # of the written episode
-    reversed_steps: int  # of them, the reversed motion
+    reversed_steps: int  # of them, the reversed motion (frames 0..reversed_steps-1)
     target_error_m: float  # tool position reached at the end of the drive vs the sample
     replay_error_rad: float  # replayed joints vs the demo's at the convergence step
     command_shift: int
+    join_idx: int = 0  # demo step the last reversed frame stands for; the demo resumes after it
+    demo_commands_from: int = 0  # first frame whose commands are the demo's (up to the join)
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -312,23 +338,83 @@ class Augmenter:
         backward = reverse_recording(forward, command_shift=shift)
         return backward, shift
 
-    def _write(self, path: Path, backward: dict, end_idx: int, name: str) -> int:
-        n_rev = len(backward[K.TIME])
-        rest = slice(end_idx + 1, self.length)
+    def find_join(self, backward: dict, end_idx: int) -> tuple[int, int]:
+        """Where the reversed motion hands over to the demo: ``(last reversed frame kept, demo
+        step it stands for)``.
+
+        The arm is moving along the demo when the drive out begins and its commands lead it by
+        the controller's lag, so the first forward steps carry on along the demo's path before
+        the arm turns to the sample; played backwards, the last frames would move the arm
+        *backwards* along the demo (up, out of Insert's hole) to the convergence pose. Those
+        frames are dropped: the forward steps that stay on the demo's path ahead (within half a
+        demo step of it, the matched demo step not going back) are the carry-on, the reversed
+        motion is cut at the last of them, and the demo resumes after the step it matched.
+        Without such a carry-on the join is the convergence step itself.
+        """
+        tool = backward[K.MEASURED_EEF_POSE][::-1, :3]  # forward order
+        demo = self.data[K.MEASURED_EEF_POSE][:, :3]
+        n = len(tool)
+        ahead = np.arange(end_idx, min(self.length - 1, end_idx + n))  # leaves a step after
+        if len(ahead) < 2:
+            return n - 1, end_idx
+        step = np.linalg.norm(np.diff(demo[ahead], axis=0), axis=1).mean()
+        matched = end_idx
+        for j in range(1, n // 2):
+            gaps = np.linalg.norm(demo[ahead] - tool[j], axis=1)
+            m = int(ahead[np.argmin(gaps)])
+            if gaps.min() > 0.5 * step or m < matched:
+                return n - j, matched
+            matched = m
+        return n - n // 2, matched
+
+    def _write(self, path: Path, backward: dict, end_idx: int, name: str, shift: int) -> tuple:
+        """Join the reversed motion to the demo (:meth:`find_join`) and write the episode.
+
+        Commands across the join: a reversed command is the forward command ``shift`` steps
+        further back in the recording, so the last ``shift`` reversed frames have none (the
+        drive's first command, about the demo's command before the convergence step, is the
+        last one). Those frames take the demo's own commands from there on, stretched over
+        them: from the convergence step's to the join step's command (joint values and
+        positions interpolated linearly between demo steps, orientations by normalised
+        quaternion interpolation), and the demo's next command follows after the join. The
+        command stream thus runs on into the demo's remainder without holding anywhere.
+        Relative command keys (and ``command_joint_vel``) are recomputed from the absolute
+        ones over that span.
+        """
+        cut, join = self.find_join(backward, end_idx)
+        n_rev = cut + 1
+        n_total = len(backward[K.TIME])
+        fill_from = max(1, n_total - shift)
+        rest = slice(join + 1, self.length)
         lowdim = {}
         for key in self.lowdim_keys:
-            lowdim[key] = np.concatenate([backward[key], self.data[key][rest]])
+            lowdim[key] = np.concatenate([backward[key][:n_rev], self.data[key][rest]])
         total = len(lowdim[K.TIME])
         lowdim[K.TIME] = self.data[K.TIME][0] + self.dt * np.arange(total)
-        # The join: the demo's first appended step differs from the reversed motion's last one,
-        # not from the demo step before it (which the reversed motion replaces).
-        join = slice(n_rev - 1, n_rev + 1)
-        absolute = {k: v[join] for k, v in lowdim.items() if k in K.KEYS}
+        if fill_from < n_rev:
+            start = max(end_idx - 1, 0)
+            frames = np.arange(1, n_rev - fill_from + 1)
+            tau = start + (join - start) * frames / len(frames)
+            for key in self.lowdim_keys:
+                spec = K.KEYS.get(key)
+                if spec is None or spec.source != K.COMMAND or spec.is_relative:
+                    continue
+                if key == K.COMMAND_JOINT_VEL:
+                    continue  # a difference of command_joint_pos, recomputed below
+                pose = spec.quantity is K.Quantity.EEF_POSE
+                lowdim[key][fill_from:n_rev] = demo_at(self.data[key], tau, pose=pose)
+        # Relative keys (and command_joint_vel) recomputed from the absolute values over the
+        # span that changed: the filled commands and the demo's first appended step.
+        first = max(min(fill_from, n_rev) - 1, 0)
+        span = slice(first, min(n_rev + 1, total))
+        absolute = {k: v[span] for k, v in lowdim.items() if k in K.KEYS}
         for key, rel in derive_relative(absolute, set(lowdim)).items():
-            lowdim[key][n_rev] = rel[1]
+            lowdim[key][first + 1 : span.stop] = rel[1:]
         if K.COMMAND_JOINT_VEL in lowdim:
             c = lowdim[K.COMMAND_JOINT_POS]
-            lowdim[K.COMMAND_JOINT_VEL][n_rev] = (c[n_rev] - c[n_rev - 1]) / self.dt
+            lowdim[K.COMMAND_JOINT_VEL][first + 1 : span.stop] = (
+                c[first + 1 : span.stop] - c[first : span.stop - 1]
+            ) / self.dt
         attrs = dict(self.demo.attrs)
         attrs.pop(K.ATTR_FORMAT, None)
         attrs[K.ATTR_DEMO_NAME] = name
@@ -343,12 +429,12 @@ class Augmenter:
                     else:
                         j = (t - n_rev) % IMAGE_CHUNK
                         if j == 0:
-                            start = end_idx + 1 + t - n_rev
+                            start = join + 1 + t - n_rev
                             stop = min(start + IMAGE_CHUNK, self.length)
                             chunk[key] = np.asarray(self.demo[key][start:stop])
                         step[key] = chunk[key][j]
                 writer.append(step)
-        return total
+        return total, n_rev, join, fill_from
 
     # ------------------------------------------------------------------ running
     def episode_path(self, region_idx: int, sample_idx: int) -> Path:
@@ -388,16 +474,20 @@ class Augmenter:
                     )
                 recording, target_error = self._drive(target)
                 backward, shift = self._assemble(recording, end_idx)
-                steps = self._write(path, backward, end_idx, path.name.split(".")[0])
+                steps, n_rev, join, fill_from = self._write(
+                    path, backward, end_idx, path.name.split(".")[0], shift
+                )
                 yield SampleResult(
                     region_idx,
                     sample_idx,
                     path,
                     steps,
-                    len(backward[K.TIME]),
+                    n_rev,
                     target_error,
                     replay_error,
                     shift,
+                    join_idx=join,
+                    demo_commands_from=fill_from,
                 )
 
 

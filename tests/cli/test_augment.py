@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rmb_lerobot import find_episodes, open_episode
@@ -44,10 +45,13 @@ def test_proposed_regions_are_written_and_augmented(demo, tmp_path, capsys):
     ]
     with open_episode(demo) as base:
         remainder = len(base) - region.end_idx - 1
+        last = base["measured_joint_pos"][-1]
     for path in episodes:
         with open_episode(path) as ep:
             ep.validate(frames=True)
-            assert len(ep) == round(0.5 / 0.032) + 1 + remainder
+            # the reversed motion (cut where it joins the demo) and at most the demo's remainder
+            assert remainder < len(ep) <= round(0.5 / 0.032) + 1 + remainder
+            np.testing.assert_array_equal(ep["measured_joint_pos"][-1], last)
 
 
 @pytest.mark.parametrize(
