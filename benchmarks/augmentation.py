@@ -7,11 +7,12 @@ Usage::
         [--eval-episodes 3] [--out outputs/augmentation]
 
 One scripted demonstration in world ``--world`` (front + hand cameras 64x64, as
-``benchmarks/learning.py``), ``rmb-augment --propose-regions`` around it (``--samples`` per
-region), two datasets (the demo alone; the demo + its augmentations) converted with
-``rmb-convert to-lerobot``, and the same policy recipe and training budget on each
-(``learning.py``'s recipes, train and eval stages: unmodified ``lerobot-train``, one torch
-thread, then ``lerobot-eval`` ``--eval-episodes`` times in each world 0..5 with unseen seeds).
+``benchmarks/learning.py``), ``rmb-augment --propose-regions`` around it (or ``--regions
+YAML``; ``--samples`` per region), two datasets (the demo alone; the demo + its
+augmentations) converted with ``rmb-convert to-lerobot``, and the same policy recipe and
+training budget on each (``learning.py``'s recipes, train and eval stages: unmodified
+``lerobot-train``, one torch thread, then ``lerobot-eval`` ``--eval-episodes`` times in each
+world 0..5 with unseen seeds).
 Prints a markdown table. Stages whose output exists are skipped, so an interrupted run resumes.
 """
 
@@ -78,8 +79,11 @@ def data_stages(args: argparse.Namespace) -> list[Stage]:
                 [
                     entry.rmb_env_name,
                     str(demo_episode),
-                    "--propose-regions",
-                    f"--radius={args.radius}",
+                    *(
+                        [f"--regions={args.regions}"]
+                        if args.regions
+                        else ["--propose-regions", f"--radius={args.radius}"]
+                    ),
                     f"--duration={args.duration}",
                     f"--samples-per-region={args.samples}",
                     f"--out={aug_dir}",
@@ -139,6 +143,12 @@ def main() -> None:
     parser.add_argument("--world", type=int, default=2, help="world of the one demonstration")
     parser.add_argument("--samples", type=int, default=16, help="augmentations per region")
     parser.add_argument("--radius", type=float, default=0.04, help="metres, proposed regions")
+    parser.add_argument(
+        "--regions",
+        type=Path,
+        default=None,
+        help="a regions YAML (rmb-augment --regions) instead of --propose-regions",
+    )
     parser.add_argument("--duration", type=float, default=1.0, help="seconds per drive out")
     parser.add_argument("--steps", type=int, default=300, help="training steps (both runs)")
     parser.add_argument("--batch-size", type=int, default=16)
@@ -175,12 +185,12 @@ def main() -> None:
         )
         results = dict(zip(CONDITIONS, outcomes, strict=True))
     recipe = learning.RECIPES[args.policy]
+    where = f"region of {args.regions}" if args.regions else f"proposed region ({args.radius} m)"
     print(
         f"\n{args.policy} ({args.steps} x {args.batch_size}, {learning.dataset_name(recipe)} "
         f"{'+'.join(learning.CAMERAS)} {learning.SIZE}x{learning.SIZE}) on "
         f"{entry_for(args.env).rmb_env_name}: 1 demo in world {args.world} vs + "
-        f"{args.samples} SART samples per proposed region (radius {args.radius} m); "
-        f"{args.eval_episodes} eval episodes per world; "
+        f"{args.samples} SART samples per {where}; {args.eval_episodes} eval episodes per world; "
         f"wall {(time.perf_counter() - start) / 60:.0f} min\n"
     )
     if args.policy_args:
