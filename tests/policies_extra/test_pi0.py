@@ -11,9 +11,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -177,22 +174,8 @@ def test_lerobot_train_fine_tunes_a_local_checkpoint_with_the_recipes_rename_map
     for part in (policy, pre, post):
         part.save_pretrained(checkpoint)
 
-    out = tmp_path / "train"
     args = vla.train_args(converted, "pi0", checkpoint=str(checkpoint))
-    args += ["--policy.device=cpu", "--policy.push_to_hub=false", f"--output_dir={out}"]
-    args += ["--steps=2", "--batch_size=2", "--num_workers=0", "--save_freq=2"]
-    args += ["--wandb.enable=false", "--log_freq=1"]
-    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
-    run = subprocess.run(
-        [sys.executable, str(HERE / "tiny_vla.py"), "lerobot_train", *args],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert run.returncode == 0, run.stderr[-3000:]
-    trained = out / "checkpoints" / "last" / "pretrained_model"
+    _, trained = tiny_vla.lerobot_train_two_steps(args, tmp_path, patched=True)
     saved = json.loads((trained / "config.json").read_text())
     assert saved["type"] == "pi0" and saved["chunk_size"] == CHUNK
     assert set(saved["input_features"]) >= set(vla.PI_CAMERA_SLOTS)

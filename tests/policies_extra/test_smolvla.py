@@ -16,9 +16,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -156,24 +153,10 @@ def test_lerobot_train_runs_the_recipe_with_the_hub_replaced_by_a_local_cache(
     cache = tmp_path / "hub"
     tiny_vla.seed_hub_cache(cache, CHECKPOINT, base)
     tiny_vla.seed_hub_cache(cache, BACKBONE, smolvlm)
-    out = tmp_path / "train"
-    args = vla.train_args(converted, "smolvla")
-    args += ["--policy.device=cpu", "--policy.push_to_hub=false", f"--output_dir={out}"]
-    args += ["--steps=2", "--batch_size=2", "--num_workers=0", "--save_freq=2"]
-    args += ["--log_freq=1", "--wandb.enable=false"]
-    env = {**os.environ, "HF_HUB_OFFLINE": "1", "HF_HUB_CACHE": str(cache)}
-    env["WANDB_MODE"] = "disabled"
-    run = subprocess.run(
-        [sys.executable, "-m", "lerobot.scripts.lerobot_train", *args],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    stdout, trained = tiny_vla.lerobot_train_two_steps(
+        vla.train_args(converted, "smolvla"), tmp_path, hub_cache=cache
     )
-    assert run.returncode == 0, run.stderr[-3000:]
-    assert f"Loading  {BACKBONE} weights" in run.stdout  # load_vlm_weights, from the cache
-    trained = out / "checkpoints" / "last" / "pretrained_model"
+    assert f"Loading  {BACKBONE} weights" in stdout  # load_vlm_weights, from the cache
     saved = json.loads((trained / "config.json").read_text())
     assert (saved["type"], saved["vlm_model_name"], saved["chunk_size"]) == (
         "smolvla",

@@ -353,3 +353,36 @@ def seed_hub_cache(cache: Path, repo_id: str, files: Path) -> None:
     shutil.copytree(files, repo / "snapshots" / revision)
     (repo / "refs").mkdir()
     (repo / "refs" / "main").write_text(revision)
+
+
+def lerobot_train_two_steps(
+    args: Sequence[str], workdir: Path, *, hub_cache: Path | None = None, patched: bool = False
+) -> tuple[str, Path]:
+    """Run ``lerobot-train ARGS`` for 2 CPU steps, offline; return its stdout and the saved
+    pretrained model.
+
+    ``hub_cache``: the Hugging Face cache (``HF_HUB_CACHE``) that answers the Hub ids in ARGS.
+    ``patched``: run it through this module's ``lerobot_train`` entry (pi0's network sizes are
+    not config fields, so they are shrunk in that process); otherwise LeRobot's own module.
+    """
+    import os
+    import subprocess
+
+    out = Path(workdir) / "train"
+    args = [*args, "--policy.device=cpu", "--policy.push_to_hub=false", f"--output_dir={out}"]
+    args += ["--steps=2", "--batch_size=2", "--num_workers=0", "--save_freq=2"]
+    args += ["--log_freq=1", "--wandb.enable=false"]
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "WANDB_MODE": "disabled"}
+    if hub_cache is not None:
+        env["HF_HUB_CACHE"] = str(hub_cache)
+    entry = [__file__, "lerobot_train"] if patched else ["-m", "lerobot.scripts.lerobot_train"]
+    run = subprocess.run(
+        [sys.executable, *entry, *args],
+        cwd=workdir,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout, out / "checkpoints" / "last" / "pretrained_model"
