@@ -56,6 +56,9 @@ class RmbEnvConfig(EnvConfig):
     depth: bool = False
     # Evaluate in one world (0..5) only; None: each episode's world is drawn from its seed.
     world_idx: int | None = None
+    # Every episode with this instruction (language-conditioned tasks: Pick's 18); lerobot-eval
+    # then scores one instruction, and hands it to the policy as the task.
+    instruction: str | None = None
     # Append RMB's fingertip tactile grids (left, then right, 5 x 8 each, row-major) to the
     # state, as a dataset converted with --state-keys measured_joint_pos left_tactile_sensor
     # right_tactile_sensor holds them (see TactileInState).
@@ -114,7 +117,11 @@ class RmbEnvConfig(EnvConfig):
         function, so the env factory pickles by reference.
         """
         factory = functools.partial(
-            make_lerobot_env, self.task, world_idx=self.world_idx, **self.gym_kwargs
+            make_lerobot_env,
+            self.task,
+            world_idx=self.world_idx,
+            instruction=self.instruction,
+            **self.gym_kwargs,
         )
         if use_async_envs and n_envs > 1:
             vec = gym.vector.AsyncVectorEnv(
@@ -189,26 +196,39 @@ class TactileInState(gym.ObservationWrapper):
         return {**observation, "agent_pos": np.concatenate(parts).astype(np.float32)}
 
 
-class FixedWorld(gym.Wrapper):
-    """Every episode in one world: ``reset`` adds ``world_idx`` unless the caller set it."""
+class FixedResetOptions(gym.Wrapper):
+    """Every episode with the same reset options (``world_idx``, ``instruction``): ``reset``
+    adds them unless the caller set them."""
 
-    def __init__(self, env: gym.Env, world_idx: int):
+    def __init__(self, env: gym.Env, options: dict):
         super().__init__(env)
-        self.world_idx = int(world_idx)
+        self.options = dict(options)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        return self.env.reset(seed=seed, options={"world_idx": self.world_idx, **(options or {})})
+        return self.env.reset(seed=seed, options={**self.options, **(options or {})})
 
 
-def make_lerobot_env(task: str, world_idx: int | None = None, **kwargs) -> gym.Env:
+def make_lerobot_env(
+    task: str, world_idx: int | None = None, instruction: str | None = None, **kwargs
+) -> gym.Env:
     """:func:`make_env`, with depth in LeRobot's layout when ``depth=True`` (and cameras), the
-    tactile grids in the state when ``tactile=True``, in one world if ``world_idx`` is given."""
+    tactile grids in the state when ``tactile=True``, in one world if ``world_idx`` is given
+    and with one instruction if ``instruction`` is (a task that takes none refuses it)."""
     env = make_env(task, **kwargs)
     if "depth" in env.observation_space.spaces:
         env = DepthForLeRobot(env)
     if kwargs.get("tactile"):
         env = TactileInState(env)
-    return env if world_idx is None else FixedWorld(env, world_idx)
+    fixed = {"world_idx": int(world_idx)} if world_idx is not None else {}
+    if instruction is not None:
+        accepted = env.unwrapped.task.reset_options
+        if "instruction" not in accepted:
+            raise ValueError(
+                f"env {task!r} takes no instruction (got {instruction!r}); "
+                f"its reset options: {list(accepted) or 'none'}"
+            )
+        fixed["instruction"] = instruction
+    return FixedResetOptions(env, fixed) if fixed else env
 
 
 def _register(entry: EnvEntry) -> type[RmbEnvConfig]:

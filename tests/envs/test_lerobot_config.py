@@ -70,6 +70,28 @@ def test_world_idx_evaluates_every_episode_in_that_world():
         vec.close()
 
 
+def test_instruction_evaluates_every_episode_with_that_instruction():
+    """``lerobot-eval --env.type=rmb_ur5e_pick --env.instruction=...`` scores one instruction;
+    the policy gets it as the task (the env's task_description)."""
+    from rmb_lerobot.envs.tasks.pick import INSTRUCTIONS
+
+    wanted = INSTRUCTIONS[5]
+    config = ENV_CONFIGS["rmb_ur5e_pick"](cameras=[], instruction=wanted)
+    vec = config.create_envs(n_envs=2)["rmb_ur5e_pick"][0]
+    try:
+        for seed in (0, 7, 11):  # without it, each seed draws its own
+            vec.reset(seed=seed)
+            assert list(vec.call("task_description")) == [wanted, wanted]
+    finally:
+        vec.close()
+
+
+def test_instruction_is_refused_by_a_task_without_instructions():
+    config = ENV_CONFIGS["rmb_ur5e_insert"](cameras=[], instruction="Insert it.")
+    with pytest.raises(ValueError, match=r"'MujocoUR5eInsert' takes no instruction"):
+        config.create_envs(n_envs=1)
+
+
 def test_async_vector_env_uses_forkserver_workers():
     config = ENV_CONFIGS["rmb_ur5e_door"](cameras=[], episode_length=5)
     vec = config.create_envs(n_envs=2, use_async_envs=True)["rmb_ur5e_door"][0]
