@@ -73,7 +73,13 @@ def test_sigterm_and_ctrl_c_keep_the_old_dataset_and_leave_nothing(
 ):
     dest = _old_dataset(tmp_path / "out" / "ds")
     _signal_at_first_episode(monkeypatch, signum)
-    code = main(["to-lerobot", str(episodes), "--output", str(dest), "--overwrite"])
+    # Ctrl-C as a terminal delivers it: Python's default SIGINT handler, whatever an earlier
+    # test in this (long-lived xdist) worker left installed. Once, CI saw SIGINT ignored here.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        code = main(["to-lerobot", str(episodes), "--output", str(dest), "--overwrite"])
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert code == 128 + signum
     err = capsys.readouterr().err
     name = signal.Signals(signum).name
