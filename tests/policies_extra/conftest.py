@@ -214,6 +214,26 @@ def train_and_eval_on(tmp_path, lerobot_cli):
 
 # ------------------------------------------------------ save/load of a policy with EMA weights
 @pytest.fixture
+def fit_batch():
+    """``fit_batch(policy, batch, steps)``: AdamW (lr 3e-3) on one batch, seeded, in train mode;
+    ``policy.update()`` after each step for policies with an EMA (what lerobot-train calls)."""
+
+    def _fit(policy, batch: dict, steps: int = 100, update: bool = False) -> None:
+        optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
+        policy.train()
+        torch.manual_seed(0)
+        for _ in range(steps):
+            loss, _ = policy.forward(batch)
+            optimizer.zero_grad()
+            loss.backward()
+            optimizer.step()
+            if update:
+                policy.update()
+
+    return _fit
+
+
+@pytest.fixture
 def ema_save_load(tmp_path):
     """``ema_save_load(policy, batch, obs) -> (loaded, expected, got)``: train ``policy`` 3
     steps on ``batch()``, updating its EMA copy after each (so the averaged weights used for

@@ -121,7 +121,7 @@ def test_the_straight_path_velocity_minimises_the_loss(depth_box):
     assert policy.model.compute_loss(state, cloud, actions) > 1e-6
 
 
-def test_loss_and_one_step_error_decrease_on_a_tiny_batch(depth_box):
+def test_loss_and_one_step_error_decrease_on_a_tiny_batch(depth_box, fit_batch):
     """The loss is O(delta^2) and noisy (fresh noise and times every step), so it is compared
     on the same draws before and after training."""
     policy = make_flow_policy()
@@ -138,14 +138,7 @@ def test_loss_and_one_step_error_decrease_on_a_tiny_batch(depth_box):
         return loss, error
 
     loss_before, error_before = evaluate()
-    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
-    policy.train()
-    torch.manual_seed(0)
-    for _ in range(100):
-        loss, _ = policy.forward(batch)
-        optimizer.zero_grad()
-        loss.backward()
-        optimizer.step()
+    fit_batch(policy, batch)
     loss_after, error_after = evaluate()
     assert loss_after < 0.7 * loss_before  # about 0.5 after 100 steps
     assert error_after < 0.9 * error_before  # one step from noise moves towards the actions

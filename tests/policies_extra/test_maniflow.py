@@ -179,7 +179,7 @@ def test_the_straight_flow_to_the_actions_has_zero_loss(features):
     assert loss_with(1.2) > 1e-4
 
 
-def test_loss_and_few_step_error_decrease_on_a_tiny_batch(features):
+def test_loss_and_few_step_error_decrease_on_a_tiny_batch(features, fit_batch):
     """Fresh noise and times every step make the loss noisy: compare it on the same draws."""
     policy = make_maniflow(features)
     batch = windows(policy, 8)
@@ -194,15 +194,7 @@ def test_loss_and_few_step_error_decrease_on_a_tiny_batch(features):
         return loss, error
 
     loss_before, error_before = evaluate()
-    optimizer = torch.optim.AdamW(policy.get_optim_params(), lr=3e-3)
-    policy.train()
-    torch.manual_seed(0)
-    for _ in range(100):
-        loss, _ = policy.forward(batch)
-        optimizer.zero_grad()
-        loss.backward()
-        optimizer.step()
-        policy.update()
+    fit_batch(policy, batch, update=True)
     loss_after, error_after = evaluate()
     assert loss_after < 0.5 * loss_before  # about 0.15 of it after 100 steps
     assert error_after < 0.7 * error_before  # 3 Euler steps of the EMA land near the actions
