@@ -18,7 +18,11 @@ never normalised (``VISUAL: IDENTITY``): normalising depth would break the geome
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
 
 from lerobot.configs import NormalizationMode, PreTrainedConfig
 from lerobot.configs.types import FeatureType
@@ -28,6 +32,36 @@ from rmb_lerobot import lerobot_names as N
 
 DEPTH_UNITS = {"mm": 1e-3, "m": 1.0}  # metres per depth unit
 DEFAULT_CAMERA_FOVY = 45.0  # RMB's fixed UR5e cameras (front, left, right); the hand camera: 62
+CROP_FRAMES = ("auto", "camera", "world")
+# Default crop boxes (min, max) in metres per frame. Camera frame (x right, y down, z forward):
+# a depth range that drops invalid pixels and the far background. World frame (z up): the UR5e
+# MuJoCo tables' workspace above the table top (RMB_TABLE in rmb_lerobot/envs/workspace.py: top
+# surface z = 0.815 m, x in +-0.275, y in +-0.5, the same table in every UR5e task), from 1.5 cm
+# above the top (drops the table: its back-projected pixels lie within ~7 mm of it at 64x64),
+# back to x = -0.8 so that the arm on its stand at x = -0.605 stays, up to 1.6 m.
+DEFAULT_CROP = {
+    "camera": ((-1.5, -1.5, 0.1), (1.5, 1.5, 1.5)),
+    "world": ((-0.8, -0.5, 0.83), (0.35, 0.5, 1.6)),
+}
+
+
+def checked_camera_pose(pose: Any, name: str) -> list[list[float]]:
+    """A 4x4 rigid transform as nested lists, or ValueError naming ``name`` and the value."""
+    try:
+        matrix = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        matrix = np.full(1, np.nan)
+    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
+        raise ValueError(f"{name} must be a finite 4x4 matrix (world from camera), got {pose!r}")
+    rotation = matrix[:3, :3]
+    if not np.allclose(matrix[3], [0, 0, 0, 1]) or not np.allclose(
+        rotation @ rotation.T, np.eye(3), atol=1e-5
+    ):
+        raise ValueError(
+            f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1), "
+            f"got {matrix.tolist()}"
+        )
+    return matrix.tolist()
 
 
 @dataclass
@@ -52,9 +86,20 @@ class PointCloudUnetConfig(PreTrainedConfig):
             and ~0.5 s per 640x480 frame, so use e.g. 5 for RMB's 640x480 recordings.
         num_points: Points per cloud after farthest-point sampling (repeated if fewer remain).
         use_pc_color: Append the RGB of ``observation.images.<camera>`` (x, y, z, r, g, b).
-        crop_min / crop_max: Box kept, in metres in the camera frame (x right, y down, z
-            forward along the optical axis); the dataset has no camera poses, so the default
-            crop is a depth range that drops the far background and invalid pixels.
+        camera_pose: The camera's 4x4 world-from-camera transform (metres; camera axes x right,
+            y down, z forward), as rmb-collect records it for cameras fixed to the world
+            (``<camera>_depth_image_pose``). None: read from the dataset's ``meta/rmb.json``
+            when training starts (then saved with the policy); stays None for data recorded
+            without it. Checked against the dataset when set.
+        crop_frame: Where the cloud is cropped and which frame the PointNet sees: ``"camera"``
+            (points in the camera frame), ``"world"`` (points moved to the world frame with
+            ``camera_pose``, cropped there, as DP3 and RMB do; needs the pose) or ``"auto"``
+            (world when the pose is known, else camera).
+        crop_min / crop_max: Box kept, in metres in the crop frame. None: that frame's default
+            (:data:`DEFAULT_CROP`): camera frame (-1.5, -1.5, 0.1)..(1.5, 1.5, 1.5), a depth
+            range that drops the far background and invalid pixels; world frame
+            (-0.8, -0.5, 0.83)..(0.35, 0.5, 1.6), the UR5e table's workspace above its top
+            (z = 0.815 m), so the table surface is dropped and the objects and the arm stay.
         point_cloud_cache_size: Clouds memoised by the content of their depth (+ colour)
             frame, so later epochs skip the sampling; 0 disables.
         encoder_channels / encoder_output_dim: DP3's PointNet (per-point MLP with LayerNorm,
@@ -64,6 +109,11 @@ class PointCloudUnetConfig(PreTrainedConfig):
             The U-Net, LeRobot's ``DiffusionConditionalUnet1d`` (FiLM conditioning).
         do_mask_loss_for_padding: Ignore actions past an episode's end (DP3 trains on them:
             LeRobot pads with copies of the last action, which teaches holding still).
+        use_ema: Predict with an exponential moving average of the weights, updated after each
+            optimizer step (LeRobot's train loop calls ``policy.update()``) and saved with the
+            policy; DP3 and RMB's ``TrainDiffusionPolicy3d`` sample from it (on by default).
+        ema_power / ema_max_decay: Its warm-up, decay = 1 - (1 + step) ** -power, capped
+            (diffusion_policy's ``EMAModel`` as RMB configures it: 0.75, 0.9999).
     """
 
     n_obs_steps: int = 2
@@ -84,8 +134,10 @@ class PointCloudUnetConfig(PreTrainedConfig):
     depth_stride: int = 1
     num_points: int = 512
     use_pc_color: bool = False
-    crop_min: tuple[float, float, float] = (-1.5, -1.5, 0.1)
-    crop_max: tuple[float, float, float] = (1.5, 1.5, 1.5)
+    camera_pose: list[list[float]] | None = None
+    crop_frame: str = "auto"
+    crop_min: tuple[float, float, float] | None = None
+    crop_max: tuple[float, float, float] | None = None
     point_cloud_cache_size: int = 20000
 
     encoder_channels: tuple[int, ...] = (64, 128, 256)
@@ -99,6 +151,10 @@ class PointCloudUnetConfig(PreTrainedConfig):
     use_film_scale_modulation: bool = True
     gradient_checkpointing: bool = False
     do_mask_loss_for_padding: bool = False
+
+    use_ema: bool = True
+    ema_power: float = 0.75
+    ema_max_decay: float = 0.9999
 
     optimizer_lr: float = 1e-4
     optimizer_betas: tuple[float, float] = (0.95, 0.999)
@@ -126,8 +182,22 @@ class PointCloudUnetConfig(PreTrainedConfig):
             raise ValueError(f"depth_unit must be one of {sorted(DEPTH_UNITS)}")
         if self.depth_stride < 1 or self.num_points < 1:
             raise ValueError("depth_stride and num_points must be >= 1")
-        if any(lo > hi for lo, hi in zip(self.crop_min, self.crop_max, strict=True)):
-            raise ValueError(f"crop_min {self.crop_min} must be <= crop_max {self.crop_max}")
+        if self.crop_frame not in CROP_FRAMES:
+            raise ValueError(f"crop_frame must be one of {CROP_FRAMES}, got {self.crop_frame!r}")
+        for name in ("crop_min", "crop_max"):
+            value = getattr(self, name)
+            if value is not None:
+                if len(value) != 3 or not all(math.isfinite(float(v)) for v in value):
+                    raise ValueError(f"{name} must be 3 finite numbers (x, y, z), got {value!r}")
+                setattr(self, name, tuple(float(v) for v in value))
+        if self.camera_pose is not None:
+            self.camera_pose = checked_camera_pose(self.camera_pose, "camera_pose")
+        if not (self.crop_frame == "world" and self.camera_pose is None):
+            # The box of the frame known now; a pose may still come from the dataset
+            # (resolve_camera_pose), and the point-cloud builder asks for the box again.
+            self.crop_box()
+        if not 0.0 <= self.ema_max_decay < 1.0:
+            raise ValueError(f"ema_max_decay must be in [0, 1), got {self.ema_max_decay}")
 
     @property
     def depth_key(self) -> str:
@@ -147,6 +217,29 @@ class PointCloudUnetConfig(PreTrainedConfig):
                 f"{depth}. Convert with 'rmb-convert to-lerobot --depth'."
             )
         return depth[0]
+
+    @property
+    def resolved_crop_frame(self) -> str:
+        """``"camera"`` or ``"world"``: ``crop_frame`` with ``"auto"`` decided by the pose."""
+        if self.crop_frame == "auto":
+            return "camera" if self.camera_pose is None else "world"
+        return self.crop_frame
+
+    def crop_box(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """``(crop_min, crop_max)`` in :attr:`resolved_crop_frame`, defaults filled in."""
+        frame = self.resolved_crop_frame
+        if frame == "world" and self.camera_pose is None:
+            raise ValueError(
+                f"crop_frame={self.crop_frame!r} needs camera_pose (the camera's 4x4 world pose), "
+                "which the dataset does not record: set --policy.camera_pose or use "
+                "crop_frame='camera'"
+            )
+        default_min, default_max = DEFAULT_CROP[frame]
+        low = default_min if self.crop_min is None else tuple(self.crop_min)
+        high = default_max if self.crop_max is None else tuple(self.crop_max)
+        if any(lo > hi for lo, hi in zip(low, high, strict=True)):
+            raise ValueError(f"crop_min {low} must be <= crop_max {high} ({frame} frame)")
+        return low, high
 
     @property
     def color_key(self) -> str | None:

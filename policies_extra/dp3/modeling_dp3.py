@@ -24,6 +24,7 @@ from lerobot.policies.pretrained import PreTrainedPolicy
 from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
 
+from rmb_lerobot.policies_extra.ema import EmaWeights
 from rmb_lerobot.policies_extra.observation_history import ObservationHistory
 
 from .configuration_dp3 import DP3Config, PointCloudUnetConfig
@@ -32,7 +33,7 @@ from .point_cloud import DepthPointClouds, resolve_camera_fovy
 POINT_CLOUD = "observation.point_cloud"  # (B, n_obs_steps, num_points, 3 or 6), made here
 
 
-class DP3Policy(ObservationHistory, PreTrainedPolicy):
+class DP3Policy(EmaWeights, ObservationHistory, PreTrainedPolicy):
     """Point cloud + state -> chunk of actions, ``n_action_steps`` executed per prediction."""
 
     config_class = DP3Config
@@ -46,6 +47,9 @@ class DP3Policy(ObservationHistory, PreTrainedPolicy):
         self.config = config
         self.point_clouds = DepthPointClouds(config)
         self.model = self.make_model(config)
+        self.ema_model = None
+        if config.use_ema:
+            self.init_ema()
         self.reset()
 
     def make_model(self, config: PointCloudUnetConfig) -> PointCloudUnet:
@@ -66,8 +70,8 @@ class DP3Policy(ObservationHistory, PreTrainedPolicy):
         return batch[OBS_STATE], self.point_clouds(batch[cfg.depth_key], rgb)
 
     def sampling_model(self) -> PointCloudUnet:
-        """The network that predicts actions (an EMA copy of :attr:`model` may stand in)."""
-        return self.model
+        """The network that predicts actions: the EMA of :attr:`model`'s weights (``use_ema``)."""
+        return self.ema_model if self.ema_model is not None else self.model
 
     def sample_chunk(self, window: dict[str, Tensor], noise: Tensor | None) -> Tensor:
         return self.sampling_model().generate_actions(*self.model_inputs(window), noise=noise)

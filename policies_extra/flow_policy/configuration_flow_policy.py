@@ -43,10 +43,6 @@ class FlowPolicyConfig(PointCloudUnetConfig):
             inference).
         timestep_scale: The U-Net's sinusoidal time embedding sees ``t * timestep_scale``;
             FlowPolicy uses 99, the range of the DDPM steps the embedding was made for.
-        use_ema: Predict with an exponential moving average of the weights, updated after each
-            optimizer step (LeRobot's train loop calls ``policy.update()``); the average is
-            saved with the policy.
-        ema_power / ema_max_decay: Its warm-up, decay = 1 - (1 + step) ** -power, capped.
     """
 
     horizon: int = 8
@@ -60,10 +56,6 @@ class FlowPolicyConfig(PointCloudUnetConfig):
     num_inference_steps: int = 1
     timestep_scale: float = 99.0
 
-    use_ema: bool = True
-    ema_power: float = 0.75
-    ema_max_decay: float = 0.9999
-
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.num_segments < 1 or self.num_inference_steps < 1:
@@ -75,5 +67,3 @@ class FlowPolicyConfig(PointCloudUnetConfig):
             raise ValueError(f"eps must be in [0, 1), got {self.eps}")
         if not 0.0 < self.delta < 1.0:
             raise ValueError(f"delta must be in (0, 1), got {self.delta}")
-        if not 0.0 <= self.ema_max_decay < 1.0:
-            raise ValueError(f"ema_max_decay must be in [0, 1), got {self.ema_max_decay}")

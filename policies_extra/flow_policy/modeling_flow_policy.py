@@ -16,10 +16,8 @@ PointNet, the state MLP and the U-Net). What differs is the generative process:
 
 from __future__ import annotations
 
-import copy
-
 import torch
-from torch import Tensor, nn
+from torch import Tensor
 
 from rmb_lerobot.policies_extra.dp3.modeling_dp3 import DP3Policy, PointCloudUnet
 
@@ -80,52 +78,14 @@ def per_sample(values: Tensor) -> Tensor:
     return values.to(torch.float32).view(-1, 1, 1)
 
 
-def ema_decay(update: int, power: float, max_decay: float) -> float:
-    """Decay of the ``update``-th average (1-based): 0 for the first two (copies), then
-    1 - (1 + k) ** -power capped, as diffusion_policy's ``EMAModel`` with RMB's settings
-    (update_after_step 0, inv_gamma 1; TrainFlowPolicy.py)."""
-    k = max(0, update - 2)
-    return 0.0 if k == 0 else min(1.0 - (1.0 + k) ** -power, max_decay)
-
-
-@torch.no_grad()
-def ema_update(average: nn.Module, model: nn.Module, decay: float) -> None:
-    """Move ``average``'s parameters towards ``model``'s (``decay`` of the old kept); copy the
-    buffers."""
-    for avg, current in zip(average.parameters(), model.parameters(), strict=True):
-        avg.lerp_(current, 1.0 - decay)
-    for avg, current in zip(average.buffers(), model.buffers(), strict=True):
-        avg.copy_(current)
-
-
 class FlowPolicy(DP3Policy):
     """Point cloud + state -> chunk of actions from one flow step, ``n_action_steps`` executed."""
 
     config_class = FlowPolicyConfig
     name = "flow_policy"
 
-    def __init__(self, config: FlowPolicyConfig, dataset_meta=None, **kwargs):
-        super().__init__(config, dataset_meta=dataset_meta, **kwargs)
-        self.ema_model: ConsistencyFlowModel | None = None
-        if config.use_ema:
-            shared = {id(config): config}  # one config for both copies
-            self.ema_model = copy.deepcopy(self.model, shared).requires_grad_(False)
-            self.register_buffer("ema_updates", torch.zeros((), dtype=torch.long))
-
     def make_model(self, config: FlowPolicyConfig) -> ConsistencyFlowModel:
         return ConsistencyFlowModel(config)
-
-    def sampling_model(self) -> ConsistencyFlowModel:
-        return self.ema_model if self.ema_model is not None else self.model
-
-    @torch.no_grad()
-    def update(self) -> None:
-        """Move the EMA weights towards the trained ones (after each optimizer step)."""
-        if self.ema_model is None:
-            return
-        self.ema_updates += 1
-        decay = ema_decay(int(self.ema_updates), self.config.ema_power, self.config.ema_max_decay)
-        ema_update(self.ema_model, self.model, decay)
 
 
 # LeRobot's factory finds the policy class of a config ``<Name>Config`` as ``<Name>Policy``.

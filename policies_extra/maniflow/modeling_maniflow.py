@@ -26,7 +26,6 @@
 
 from __future__ import annotations
 
-import copy
 import math
 
 import torch
@@ -38,11 +37,8 @@ from torchvision.models.resnet import BasicBlock
 
 from rmb_lerobot.policies_extra.dp3.modeling_dp3 import PointNetEncoder, mlp
 from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds, resolve_camera_fovy
-from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import (
-    ema_decay,
-    ema_update,
-    per_sample,
-)
+from rmb_lerobot.policies_extra.ema import EmaWeights
+from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import per_sample
 from rmb_lerobot.policies_extra.observation_history import ObservationHistory
 
 from .configuration_maniflow import ManiFlowConfig
@@ -300,7 +296,7 @@ def _rows(obs: dict[str, Tensor], rows: slice) -> dict[str, Tensor]:
     return {k: v[rows] for k, v in obs.items()}
 
 
-class ManiFlowPolicy(ObservationHistory, PreTrainedPolicy):
+class ManiFlowPolicy(EmaWeights, ObservationHistory, PreTrainedPolicy):
     """Images or point cloud + state -> chunk of actions, ``n_action_steps`` executed.
 
     LeRobot's factory finds it by convention: ``ManiFlowConfig`` -> ``ManiFlowPolicy`` in the
@@ -323,9 +319,7 @@ class ManiFlowPolicy(ObservationHistory, PreTrainedPolicy):
             resolve_camera_fovy(config, dataset_meta)
             self.point_clouds = DepthPointClouds(config)
         self.model = ManiFlowModel(config)
-        shared = {id(config): config}  # one config for both copies
-        self.ema_model = copy.deepcopy(self.model, shared).requires_grad_(False)
-        self.register_buffer("ema_updates", torch.zeros((), dtype=torch.long))
+        self.init_ema()  # the consistency targets and inference use it: always on
         self.reset()
 
     @property
@@ -356,11 +350,3 @@ class ManiFlowPolicy(ObservationHistory, PreTrainedPolicy):
         return self.model.compute_loss(
             self.model_inputs(batch), batch[ACTION], self.ema_model, batch.get(f"{ACTION}_is_pad")
         )
-
-    @torch.no_grad()
-    def update(self) -> None:
-        """Move the EMA weights towards the trained ones (LeRobot's train loop calls this after
-        each optimizer step)."""
-        self.ema_updates += 1
-        decay = ema_decay(int(self.ema_updates), self.config.ema_power, self.config.ema_max_decay)
-        ema_update(self.ema_model, self.model, decay)

@@ -16,6 +16,7 @@ from lerobot.configs.types import FeatureType, NormalizationMode, PolicyFeature
 from lerobot.datasets import LeRobotDataset, LeRobotDatasetMetadata
 from lerobot.envs.utils import preprocess_observation
 from lerobot.policies.factory import get_policy_class, make_policy, make_pre_post_processors
+from safetensors.torch import load_file
 
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
 from rmb_lerobot.policies_extra.dp3 import DP3Config, DP3Policy
@@ -124,6 +125,38 @@ def test_shapes_and_a_training_step(depth_box):
     assert policy.predict_action_chunk(batch).shape == (4, 4, ACTION_DIM)
 
 
+def test_samples_from_the_average_of_its_weights_as_rmb(depth_box, fit_batch):
+    config = DP3Config(device="cpu")
+    # RMB's TrainDiffusionPolicy3d: EMAModel(power=0.75, max_value=0.9999), on by default.
+    assert (config.use_ema, config.ema_power, config.ema_max_decay) == (True, 0.75, 0.9999)
+    policy = make_dp3()
+    batch = depth_box.windows(4, policy)
+    fit_batch(policy, batch, steps=5, update=True)  # lerobot-train calls update() per step
+    assert int(policy.ema_updates) == 5
+    assert policy.sampling_model() is policy.ema_model
+    assert not torch.equal(next(policy.ema_model.parameters()), next(policy.model.parameters()))
+    noise = torch.randn(4, policy.config.horizon, ACTION_DIM)
+    policy.eval()
+    state, cloud = policy.model_inputs(batch)
+    from_average = policy.ema_model.generate_actions(state, cloud, noise=noise)
+    torch.testing.assert_close(policy.predict_action_chunk(batch, noise=noise), from_average)
+
+    plain = make_dp3(use_ema=False)
+    assert plain.ema_model is None and plain.sampling_model() is plain.model
+    assert not any(key.startswith("ema") for key in plain.state_dict())
+    with pytest.raises(ValueError, match="ema_max_decay"):
+        DP3Config(ema_max_decay=1.0)
+
+
+def test_save_load_keeps_the_average(depth_box, ema_save_load):
+    policy = make_dp3()
+    loaded, expected, got = ema_save_load(
+        policy, lambda: depth_box.windows(2, policy), depth_box.observation(1)
+    )
+    assert loaded.config.use_ema and int(loaded.ema_updates) == 3
+    torch.testing.assert_close(got, expected)
+
+
 def test_overfits_a_tiny_batch(depth_box):
     policy = make_dp3()
     batch = depth_box.windows(8, policy)
@@ -214,7 +247,7 @@ def test_env_depth_is_the_datasets_depth(expert_depth_dataset):
     assert (env_depth[0] - train_depth).abs().max() <= 2.0
 
 
-def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on):
+def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_eval_on, tmp_path):
     result = train_and_eval_on(
         expert_depth_dataset,
         "dp3",
@@ -233,3 +266,6 @@ def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_e
     )
     assert result["config"]["type"] == "dp3" and result["config"]["camera_fovy"] == 45.0
     assert result["eval"]["overall"]["n_episodes"] == 1
+    # lerobot-train called policy.update() after each of its 3 steps: the EMA is trained.
+    checkpoint = tmp_path / "train" / "checkpoints" / "last" / "pretrained_model"
+    assert int(load_file(checkpoint / "model.safetensors")["ema_updates"]) == 3

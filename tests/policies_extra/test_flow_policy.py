@@ -6,8 +6,6 @@ the training objective, one-step inference, the EMA copy, persistence and the CL
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 import torch
@@ -18,7 +16,6 @@ from safetensors.torch import load_file
 
 from rmb_lerobot.policies_extra.dp3 import DP3Policy
 from rmb_lerobot.policies_extra.flow_policy import FlowPolicy, FlowPolicyConfig
-from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import ema_decay
 from rmb_lerobot.registration import registered_policy_types
 
 STATE_DIM = ACTION_DIM = 7
@@ -69,14 +66,6 @@ def test_config_defaults_are_rmbs():
         FlowPolicyConfig(num_segments=0)
     with pytest.raises(ValueError, match="n_action_steps"):
         FlowPolicyConfig(n_action_steps=8)
-
-
-def test_ema_decay_warms_up_like_diffusion_policys_ema():
-    decays = [ema_decay(n, power=0.75, max_decay=0.9999) for n in range(1, 6)]
-    assert decays[:2] == [0.0, 0.0]  # the first two updates copy the weights
-    assert decays[2] == pytest.approx(1 - 2**-0.75)
-    assert all(a < b for a, b in itertools.pairwise(decays[2:]))
-    assert ema_decay(10**9, power=0.75, max_decay=0.9999) == 0.9999
 
 
 def test_shapes_a_training_step_and_the_ema_update(depth_box):
