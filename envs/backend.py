@@ -129,6 +129,12 @@ class Backend(SceneState):
     def fovy(self, camera: str) -> float:
         """Vertical field of view of a camera in degrees (RMB's only stored intrinsic)."""
 
+    def camera_pose(self, camera: str) -> np.ndarray | None:
+        """4x4 world-from-camera pose (metres, OpenCV axes: x right, y down, z forward) of a
+        camera fixed to the world; None for a camera that moves (on the robot) or when the
+        backend cannot tell."""
+        return None
+
     # ---------------------------------------------------------------- kinematics
     @abstractmethod
     def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:

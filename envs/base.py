@@ -344,7 +344,8 @@ class RmbEnv(gym.Env):
         return step
 
     def rmb_attrs(self) -> dict[str, Any]:
-        """Episode attributes RMB writes (env, task_desc, world_idx, cameras, depth fovy)."""
+        """Episode attributes RMB writes (env, task_desc, world_idx, cameras, depth fovy), plus,
+        with depth, each world-fixed camera's pose (:func:`~rmb_lerobot.keys.camera_pose_attr`)."""
         attrs: dict[str, Any] = {
             K.ATTR_ENV: self.rmb_env_name + "Env",
             K.ATTR_TASK_DESC: self.task_description,
@@ -353,4 +354,7 @@ class RmbEnv(gym.Env):
         }
         for cam in self.camera_names:
             attrs[K.fovy_attr(cam)] = self.fovy(cam)
+            pose = self.sim.camera_pose(cam) if self.use_depth else None
+            if pose is not None:  # fixed cameras only: a moving camera has no single pose
+                attrs[K.camera_pose_attr(cam)] = pose
         return attrs

@@ -26,6 +26,7 @@ RGB_IMAGE_SUFFIX = "_rgb_image"
 DEPTH_IMAGE_SUFFIX = "_depth_image"
 POINTCLOUD_SUFFIX = "_pointcloud"
 FOVY_ATTR_SUFFIX = "_fovy"
+CAMERA_POSE_ATTR_SUFFIX = "_pose"
 
 # ---------------------------------------------------------------- file attributes
 ATTR_FORMAT = "format"
@@ -260,6 +261,17 @@ def pointcloud_key(camera: str) -> str:
 def fovy_attr(camera: str) -> str:
     """Attribute holding a camera's vertical field of view in degrees (RMB's only intrinsic)."""
     return depth_image_key(camera) + FOVY_ATTR_SUFFIX
+
+
+def camera_pose_attr(camera: str) -> str:
+    """Attribute holding a fixed camera's world pose (``front_depth_image_pose``).
+
+    A 4x4 world-from-camera transform in metres, camera axes as OpenCV's and
+    :func:`rmb_lerobot.pointcloud.depth_to_points`' (x right, y down, z forward), so
+    ``world = pose @ [x, y, z, 1]`` for a back-projected depth point. Recorded only for cameras
+    fixed to the world (not the hand cameras), next to :func:`fovy_attr`.
+    """
+    return depth_image_key(camera) + CAMERA_POSE_ATTR_SUFFIX
 
 
 def is_rgb_image_key(key: str) -> bool:

@@ -354,6 +354,25 @@ def farthest_point_sample(
 # --------------------------------------------------------------------------- one call
 
 
+MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (y up, looks along -z)
+
+
+def opencv_camera_pose(position: ArrayLike, rotation: ArrayLike) -> np.ndarray:
+    """4x4 world-from-camera pose in OpenCV axes from a MuJoCo camera's world pose.
+
+    ``position`` (3,) and ``rotation`` (3, 3) (or its 9 row-major entries) are MuJoCo's
+    ``data.cam_xpos`` / ``data.cam_xmat`` rows: the camera frame with y up, looking along -z.
+    The result maps points of :func:`depth_to_points` (x right, y down, z forward) to the world
+    with :func:`transform_points` (``matrix=``).
+    """
+    pos = _check_vector3(position, "position")
+    rot = np.asarray(rotation, dtype=np.float64).reshape(3, 3)
+    pose = np.eye(4)
+    pose[:3, :3] = rot @ MUJOCO_TO_OPENCV
+    pose[:3, 3] = pos
+    return pose
+
+
 def depth_to_pointcloud(
     depth: ArrayLike,
     fovy: float,

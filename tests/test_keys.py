@@ -67,6 +67,7 @@ def test_camera_key_helpers():
     assert K.depth_image_key("hand") == "hand_depth_image"
     assert K.pointcloud_key("front") == "front_pointcloud"
     assert K.fovy_attr("front") == "front_depth_image_fovy"
+    assert K.camera_pose_attr("front") == "front_depth_image_pose"
     assert K.camera_of("left_depth_image") == "left"
     assert K.is_image_key("right_rgb_image") and not K.is_image_key("front_pointcloud")
     assert K.camera_keys(["front", "hand"], depth=False) == ["front_rgb_image", "hand_rgb_image"]

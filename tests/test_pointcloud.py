@@ -19,6 +19,7 @@ from rmb_lerobot.pointcloud import (
     depth_to_points,
     farthest_point_indices,
     farthest_point_sample,
+    opencv_camera_pose,
     transform_points,
 )
 
@@ -185,6 +186,19 @@ def test_rotation_and_translation_equal_the_4x4_matrix():
     )
     np.testing.assert_allclose(transform_points(points, translation=t), points + t)
     np.testing.assert_allclose(transform_points(points), points)
+
+
+def test_opencv_camera_pose_from_a_mujoco_camera():
+    """A MuJoCo camera 1 m up with the identity orientation looks straight down (its -z): the
+    centre pixel at depth 1 is the world origin, image right is world x, image down world -y."""
+    pose = opencv_camera_pose([0.0, 0.0, 1.0], np.eye(3).ravel())
+    points, _ = depth_to_points(plane(1.0, 4, 4), 90.0)  # principal point: pixel (2, 2)
+    world = transform_points(points, matrix=pose)
+    np.testing.assert_allclose(world[10], [0, 0, 0], atol=1e-7)
+    assert world[11, 0] > 0 and world[14, 1] < 0  # one column right, one row down
+    np.testing.assert_allclose(world[:, 2], 0.0, atol=1e-7)  # the plane z = 1 below the camera
+    with pytest.raises(ValueError, match="position"):
+        opencv_camera_pose([0.0, 1.0], np.eye(3))
 
 
 def test_transform_points_names_the_bad_argument():

@@ -26,6 +26,7 @@ from rmb_lerobot.envs.mujoco.scene import build_scene
 from rmb_lerobot.envs.robots import Robot
 from rmb_lerobot.envs.sensors.tactile import TactileGrid, add_pad_sites, pads_for
 from rmb_lerobot.envs.workspace import Workspace
+from rmb_lerobot.pointcloud import opencv_camera_pose
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.tasks.base import Task
@@ -203,6 +204,20 @@ class MujocoBackend(Backend):
 
     def fovy(self, camera: str) -> float:
         return float(self.model.camera(self._mujoco_camera(camera)).fovy[0])
+
+    def camera_pose(self, camera: str) -> np.ndarray | None:
+        """The pose of a camera that cannot move: fixed mode (no tracking) on a body welded to
+        the world (the world body itself or a chain of joint-less, non-mocap bodies)."""
+        cam = self.model.camera(self._mujoco_camera(camera))
+        if int(cam.mode[0]) != mujoco.mjtCamLight.mjCAMLIGHT_FIXED:
+            return None
+        body = int(cam.bodyid[0])
+        while body != 0:
+            if self.model.body_jntnum[body] > 0 or self.model.body_mocapid[body] >= 0:
+                return None
+            body = int(self.model.body_parentid[body])
+        view = self.data.camera(cam.id)
+        return opencv_camera_pose(view.xpos, view.xmat)
 
     # ---------------------------------------------------------------- kinematics
     def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:
