@@ -20,9 +20,19 @@ from torch import Tensor
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
-from rmb_lerobot.pointcloud import crop_points, depth_to_points, farthest_point_sample
+from rmb_lerobot.pointcloud import (
+    crop_points,
+    depth_to_points,
+    farthest_point_sample,
+    transform_points,
+)
 
-from .configuration_dp3 import DEFAULT_CAMERA_FOVY, DEPTH_UNITS, PointCloudUnetConfig
+from .configuration_dp3 import (
+    DEFAULT_CAMERA_FOVY,
+    DEPTH_UNITS,
+    PointCloudUnetConfig,
+    checked_camera_pose,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -30,7 +40,9 @@ logger = logging.getLogger(__name__)
 class DepthPointClouds:
     """``(..., 1, H, W)`` depth (+ ``(..., 3, H, W)`` RGB) -> ``(..., num_points, 3 or 6)``.
 
-    Points are in metres in the camera frame (x right, y down, z forward), colours in [0, 1].
+    Points are in metres, colours in [0, 1]. The frame is the config's
+    :attr:`~PointCloudUnetConfig.resolved_crop_frame`: the camera's (x right, y down, z forward)
+    or, with a known ``camera_pose``, the world's (z up), where they are also cropped.
     """
 
     def __init__(self, config: PointCloudUnetConfig):
@@ -40,7 +52,10 @@ class DepthPointClouds:
         self.scale = DEPTH_UNITS[config.depth_unit]
         self.stride = config.depth_stride
         self.num_points = config.num_points
-        self.crop = (np.asarray(config.crop_min), np.asarray(config.crop_max))
+        low, high = config.crop_box()
+        self.frame = config.resolved_crop_frame
+        self.pose = None if self.frame == "camera" else np.asarray(config.camera_pose)
+        self.crop = (np.asarray(low), np.asarray(high))
         self.cache_size = config.point_cloud_cache_size
         self._cache: OrderedDict[bytes, np.ndarray] = OrderedDict()
 
@@ -79,11 +94,13 @@ class DepthPointClouds:
     def cloud(self, depth: np.ndarray, rgb: np.ndarray | None = None) -> np.ndarray:
         """One (H, W) depth frame in the configured unit (+ (H, W, 3) RGB) -> (N, 3 or 6)."""
         points, colors = depth_to_points(depth.astype(np.float32) * self.scale, self.fovy, rgb)
+        if self.pose is not None:
+            points = transform_points(points, matrix=self.pose)
         points, colors = crop_points(points, colors, min_bound=self.crop[0], max_bound=self.crop[1])
         if len(points) == 0:
             raise ValueError(
-                f"no depth pixel lies in the crop box {self.crop[0]}..{self.crop[1]} m (camera "
-                "frame): check crop_min/crop_max, depth_unit and the camera"
+                f"no depth pixel lies in the crop box {self.crop[0]}..{self.crop[1]} m "
+                f"({self.frame} frame): check crop_min/crop_max, crop_frame, depth_unit, the camera"
             )
         points, colors = farthest_point_sample(points, self.num_points, colors)
         if colors is None:
@@ -91,21 +108,74 @@ class DepthPointClouds:
         return np.concatenate([points, colors], axis=1)
 
 
-def fovy_from_dataset(meta: Any, camera: str) -> float | None:
-    """The camera's fovy recorded in a converted dataset's ``meta/rmb.json``, if any."""
+def _episode_attrs(meta: Any) -> list[dict[str, Any]]:
+    """Every episode's attributes in a converted dataset's ``meta/rmb.json`` ([] if none)."""
     root = getattr(meta, "root", None)
     path = Path(root) / N.RMB_METADATA_PATH if root is not None else None
     if path is None or not path.is_file():
+        return []
+    return [ep.get("attrs", {}) for ep in json.loads(path.read_text()).get("episodes", [])]
+
+
+def pose_from_dataset(meta: Any, camera: str) -> list[list[float]] | None:
+    """The camera's world pose recorded in ``meta/rmb.json`` (:func:`K.camera_pose_attr`), if
+    every episode records the same one; None if none does; ValueError if they disagree or some
+    episodes lack it (a world-frame cloud needs one pose for all)."""
+    name = K.camera_pose_attr(camera)
+    episodes = _episode_attrs(meta)
+    poses = [ep.get(name) for ep in episodes]
+    known = [checked_camera_pose(p, f"{name} in {N.RMB_METADATA_PATH}") for p in poses if p]
+    if not known:
         return None
-    episodes = json.loads(path.read_text()).get("episodes", [])
-    values = {ep["attrs"].get(K.fovy_attr(camera)) for ep in episodes} - {None}
+    if len(known) != len(poses):
+        raise ValueError(
+            f"{len(poses) - len(known)} of {len(poses)} episodes lack {name!r} (the pose of "
+            f"camera {camera!r}): use --policy.crop_frame=camera or re-record them"
+        )
+    first = np.asarray(known[0])
+    for pose in known[1:]:
+        if not np.allclose(pose, first, atol=1e-6):
+            raise ValueError(
+                f"episodes disagree on the pose of camera {camera!r} ({name}): "
+                f"{first.tolist()} vs {pose}"
+            )
+    return known[0]
+
+
+def resolve_camera_pose(config: PointCloudUnetConfig, dataset_meta: Any | None) -> None:
+    """Fill ``config.camera_pose`` from the dataset; check it against the dataset if it is set;
+    then check the crop (``crop_frame="world"`` without a pose raises, naming it)."""
+    camera = N.camera_of_image_key(config.depth_key).removesuffix(N.DEPTH_CAMERA_SUFFIX)
+    try:
+        recorded = pose_from_dataset(dataset_meta, camera) if dataset_meta is not None else None
+    except ValueError as exc:
+        if config.crop_frame != "camera":
+            raise
+        logger.warning("%s: camera frame, pose not used: %s", config.type, exc)
+        recorded = None
+    if config.camera_pose is None:
+        config.camera_pose = recorded
+    elif recorded is not None and not np.allclose(config.camera_pose, recorded, atol=1e-6):
+        raise ValueError(
+            f"camera_pose={config.camera_pose} but the dataset records {recorded} for {camera!r}"
+        )
+    config.crop_box()
+    logger.info("%s: point clouds in the %s frame", config.type, config.resolved_crop_frame)
+
+
+def fovy_from_dataset(meta: Any, camera: str) -> float | None:
+    """The camera's fovy recorded in a converted dataset's ``meta/rmb.json``, if any."""
+    episodes = _episode_attrs(meta)
+    values = {ep.get(K.fovy_attr(camera)) for ep in episodes} - {None}
     if len(values) > 1:
         raise ValueError(f"episodes disagree on the fovy of camera {camera!r}: {sorted(values)}")
     return float(values.pop()) if values else None
 
 
 def resolve_camera_fovy(config: PointCloudUnetConfig, dataset_meta: Any | None) -> None:
-    """Fill ``config.camera_fovy`` from the dataset (or the default); check it if it is set."""
+    """Fill ``config.camera_fovy`` from the dataset (or the default); check it if it is set.
+    Then the camera's pose likewise (:func:`resolve_camera_pose`): the policies call this one
+    function for the camera's intrinsics and extrinsics."""
     camera = N.camera_of_image_key(config.depth_key).removesuffix(N.DEPTH_CAMERA_SUFFIX)
     recorded = fovy_from_dataset(dataset_meta, camera) if dataset_meta is not None else None
     if config.camera_fovy is None:
@@ -120,3 +190,4 @@ def resolve_camera_fovy(config: PointCloudUnetConfig, dataset_meta: Any | None) 
         raise ValueError(
             f"camera_fovy={config.camera_fovy} but the dataset records {recorded} for {camera!r}"
         )
+    resolve_camera_pose(config, dataset_meta)

@@ -6,7 +6,9 @@ hands the policy the same depth (key, layout, unit) as the converted dataset it 
 
 from __future__ import annotations
 
+import json
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -18,8 +20,14 @@ from lerobot.envs.utils import preprocess_observation
 from lerobot.policies.factory import get_policy_class, make_policy, make_pre_post_processors
 from safetensors.torch import load_file
 
+from rmb_lerobot import keys as K
+from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
+from rmb_lerobot.envs.registry import ENVS
+from rmb_lerobot.envs.workspace import RMB_TABLE
+from rmb_lerobot.pointcloud import transform_points
 from rmb_lerobot.policies_extra.dp3 import DP3Config, DP3Policy
+from rmb_lerobot.policies_extra.dp3.configuration_dp3 import DEFAULT_CROP
 from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds
 from rmb_lerobot.registration import registered_policy_types
 
@@ -265,7 +273,127 @@ def test_lerobot_train_then_eval_on_an_rmb_env(expert_depth_dataset, train_and_e
         ],
     )
     assert result["config"]["type"] == "dp3" and result["config"]["camera_fovy"] == 45.0
+    # The dataset records the front camera's pose: trained and evaluated in the world frame.
+    assert np.asarray(result["config"]["camera_pose"]).shape == (4, 4)
     assert result["eval"]["overall"]["n_episodes"] == 1
     # lerobot-train called policy.update() after each of its 3 steps: the EMA is trained.
     checkpoint = tmp_path / "train" / "checkpoints" / "last" / "pretrained_model"
     assert int(load_file(checkpoint / "model.safetensors")["ema_updates"]) == 3
+
+
+# ---------------------------------------------------------------- crop frame and camera pose
+# The front camera of the UR5e table (rmb-collect records it as front_depth_image_pose).
+FRONT_POSE = [
+    [0.0, 0.5**0.5, -(0.5**0.5), 0.5],
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, -(0.5**0.5), -(0.5**0.5), 1.5],
+    [0.0, 0.0, 0.0, 1.0],
+]
+
+
+def test_crop_frame_auto_follows_the_pose_and_boxes_default_per_frame():
+    camera = DP3Config(device="cpu")
+    assert (camera.crop_frame, camera.resolved_crop_frame) == ("auto", "camera")
+    assert camera.crop_box() == DEFAULT_CROP["camera"] == ((-1.5, -1.5, 0.1), (1.5, 1.5, 1.5))
+    world = DP3Config(device="cpu", camera_pose=FRONT_POSE)
+    assert world.resolved_crop_frame == "world" and world.crop_box() == DEFAULT_CROP["world"]
+    # The world box starts above the UR5e table top: the table surface is dropped.
+    assert DEFAULT_CROP["world"][0][2] > RMB_TABLE.table.top_z
+    forced = DP3Config(device="cpu", camera_pose=FRONT_POSE, crop_frame="camera")
+    assert forced.resolved_crop_frame == "camera"
+    own = DP3Config(device="cpu", camera_pose=FRONT_POSE, crop_max=(0.3, 0.4, 1.2))
+    assert own.crop_box() == (DEFAULT_CROP["world"][0], (0.3, 0.4, 1.2))
+
+
+def test_crop_and_pose_checks_name_the_value():
+    with pytest.raises(ValueError, match=r"crop_frame.*'table'"):
+        DP3Config(crop_frame="table")
+    with pytest.raises(ValueError, match=r"camera_pose must be a finite 4x4.*\[1, 2, 3\]"):
+        DP3Config(camera_pose=[1, 2, 3])
+    skewed = [row[:] for row in FRONT_POSE]
+    skewed[0][0] = 2.0
+    with pytest.raises(ValueError, match="camera_pose must be a rigid transform"):
+        DP3Config(camera_pose=skewed)
+    with pytest.raises(ValueError, match=r"crop_min .* must be <= crop_max .*world frame"):
+        DP3Config(camera_pose=FRONT_POSE, crop_min=(0.0, 0.0, 2.0))
+    with pytest.raises(ValueError, match="crop_max must be 3 finite numbers"):
+        DP3Config(crop_max=(1.0, float("nan"), 1.0))
+
+
+def test_world_crop_without_a_pose_raises_naming_it():
+    with pytest.raises(ValueError, match="crop_frame='world' needs camera_pose"):
+        make_dp3(crop_frame="world")
+    assert make_dp3().point_clouds.frame == "camera"  # auto, no pose: today's camera frame
+
+
+def test_save_load_keeps_the_pose_and_the_crop_frame(tmp_path):
+    policy = make_dp3(camera_pose=FRONT_POSE, crop_frame="world", crop_min=(-0.7, -0.5, 0.83))
+    policy.config.save_pretrained(tmp_path)
+    config = PreTrainedConfig.from_pretrained(tmp_path)
+    assert config.crop_frame == "world" and config.crop_box()[0] == (-0.7, -0.5, 0.83)
+    np.testing.assert_allclose(config.camera_pose, FRONT_POSE)
+    assert config.crop_max is None  # the frame's default, decided when the cloud is built
+    assert DepthPointClouds(config).frame == "world"
+
+
+@pytest.fixture(scope="module")
+def insert_front_frames() -> list[tuple[np.ndarray, dict]]:
+    """64x64 front depth (mm) of the Insert env in three worlds, with the episode attributes."""
+    import gymnasium as gym
+
+    env = gym.make(ENVS["insert"].gym_id, cameras=("front",), image_size=(64, 64), depth=True)
+    frames = []
+    try:
+        for world in (0, 3, 5):
+            obs, _ = env.reset(seed=world, options={"world_idx": world})
+            frames.append((obs["depth"]["front"].astype(np.float32), env.unwrapped.rmb_attrs()))
+    finally:
+        env.close()
+    return frames
+
+
+def test_world_crop_drops_the_table_and_keeps_the_scene(insert_front_frames):
+    """Camera-frame crop: most of the 512 points are the table. World-frame crop (the recorded
+    pose): next to none are, and the hole/peg above the table and the arm are kept."""
+    top = RMB_TABLE.table.top_z
+    (hx, hy) = RMB_TABLE.table.half_size
+    for depth, attrs in insert_front_frames:
+        pose = attrs[K.camera_pose_attr("front")]
+        common = {"camera_fovy": attrs[K.fovy_attr("front")], "num_points": 512, "device": "cpu"}
+        old = DepthPointClouds(DP3Config(**common))
+        new = DepthPointClouds(DP3Config(**common, camera_pose=pose.tolist()))
+        old_world = transform_points(old.cloud(depth), matrix=pose)  # to compare in the world
+        new_world = new.cloud(depth)
+        # ~450 pixels of a 64x64 frame are in the box at reset (repeated to 512).
+        assert len(np.unique(new_world, axis=0)) > 400
+        near_table = lambda p: np.abs(p[:, 2] - top) < 0.01  # noqa: E731 - the table surface
+        assert near_table(old_world).mean() > 0.3 and near_table(new_world).mean() < 0.02
+        assert (new_world[:, 2] > top).all()
+        over_table = (np.abs(new_world[:, 0]) < hx) & (np.abs(new_world[:, 1]) < hy)
+        assert over_table.sum() > 50  # the hole and the peg on the table
+        assert (new_world[:, 0] < -0.3).sum() > 100  # the arm, behind the table
+
+
+def test_make_policy_reads_the_pose_from_the_converted_dataset(expert_depth_dataset, tmp_path):
+    meta = LeRobotDatasetMetadata("local/insert_depth", root=expert_depth_dataset)
+    rmb = json.loads((expert_depth_dataset / N.RMB_METADATA_PATH).read_text())
+    recorded = [ep["attrs"][K.camera_pose_attr("front")] for ep in rmb["episodes"]]
+    assert len(recorded) == 2 and recorded[0] == recorded[1]  # nested lists, same in worlds 1, 4
+    policy = make_policy(DP3Config(device="cpu", num_points=32), ds_meta=meta)
+    assert policy.config.camera_pose == recorded[0]
+    assert policy.point_clouds.frame == "world"
+    moved = np.asarray(recorded[0])
+    moved[2, 3] += 0.1
+    with pytest.raises(ValueError, match="but the dataset records"):
+        make_policy(DP3Config(device="cpu", camera_pose=moved.tolist()), ds_meta=meta)
+    # Old data without the pose: "auto" keeps the camera frame; "world" says what is missing.
+    old = tmp_path / "old"
+    shutil.copytree(expert_depth_dataset, old)
+    for ep in rmb["episodes"]:
+        del ep["attrs"][K.camera_pose_attr("front")]
+    (old / N.RMB_METADATA_PATH).write_text(json.dumps(rmb))
+    old_meta = LeRobotDatasetMetadata("local/insert_depth", root=old)
+    policy = make_policy(DP3Config(device="cpu", num_points=32), ds_meta=old_meta)
+    assert policy.config.camera_pose is None and policy.point_clouds.frame == "camera"
+    with pytest.raises(ValueError, match="needs camera_pose"):
+        make_policy(DP3Config(device="cpu", crop_frame="world"), ds_meta=old_meta)
