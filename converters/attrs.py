@@ -1,10 +1,10 @@
 """Check an episode's HDF5 attributes before they are copied into ``meta/rmb.json``.
 
-Tools read them back from there (DP3 builds point clouds from ``<camera>_depth_image_fovy``,
-``from-lerobot`` restores the episodes from them), so a bad value must stop the conversion with
-the file and attribute named, not travel on: every attribute RMB defines is checked against
-what RMB writes, and any other attribute must at least be a plain JSON value (strings, finite
-numbers, booleans and lists of them).
+Tools read them back from there (DP3 builds point clouds from ``<camera>_depth_image_fovy`` and
+``<camera>_depth_image_pose``, ``from-lerobot`` restores the episodes from them), so a bad value
+must stop the conversion with the file and attribute named, not travel on: every attribute RMB
+defines is checked against what RMB writes, and any other attribute must at least be a plain JSON
+value (strings, finite numbers, booleans and lists of them).
 """
 
 from __future__ import annotations
@@ -67,6 +67,19 @@ def _fovy(value: Any) -> float:
     return fovy
 
 
+def _camera_pose(value: Any) -> list[list[float]]:
+    expected = "expected a 4x4 world-from-camera transform (finite, last row 0 0 0 1)"
+    try:
+        matrix = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise _Bad(expected) from None
+    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
+        raise _Bad(expected)
+    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+        raise _Bad(expected)
+    return matrix.tolist()
+
+
 def _json_value(value: Any) -> Any:
     if isinstance(value, list):
         return [_json_value(v) for v in value]
@@ -88,6 +101,8 @@ def _checker(name: str):
         return _integer
     if name.endswith(K.FOVY_ATTR_SUFFIX):
         return _fovy
+    if name.endswith(K.DEPTH_IMAGE_SUFFIX + K.CAMERA_POSE_ATTR_SUFFIX):
+        return _camera_pose
     return _json_value
 
 

@@ -11,9 +11,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from rmb_lerobot import find_episodes, open_episode
+from rmb_lerobot import RmbFormatError, find_episodes, open_episode
 from rmb_lerobot import keys as K
 from rmb_lerobot.cli.collect import main
+from rmb_lerobot.converters.attrs import checked_attrs
 from rmb_lerobot.envs.registry import ENVS
 from rmb_lerobot.envs.workspace import RMB_TABLE
 from rmb_lerobot.pointcloud import depth_to_points, opencv_camera_pose, transform_points
@@ -130,3 +131,14 @@ def test_collect_writes_the_pose_of_fixed_depth_cameras(tmp_path, capsys):
         assert pose.shape == (4, 4) and pose.dtype == np.float64
         np.testing.assert_allclose(pose[:3, 3], (0.5, 0.0, 1.5))
         assert K.camera_pose_attr("hand") not in ep.attrs
+
+
+def test_conversion_checks_the_pose_attribute():
+    """rmb-convert copies it into meta/rmb.json as nested lists, or stops naming it."""
+    pose = np.eye(4)
+    pose[:3, 3] = (0.5, 0.0, 1.5)
+    name = K.camera_pose_attr("front")
+    assert checked_attrs({name: pose}, "ep.rmb")[name] == pose.tolist()
+    for bad in (np.eye(3), np.full((4, 4), np.nan), np.ones((4, 4)), "front"):
+        with pytest.raises(RmbFormatError, match=r"front_depth_image_pose.*4x4 world-from-camera"):
+            checked_attrs({name: bad}, "ep.rmb")
