@@ -40,7 +40,8 @@ class Recipe:
 # a GPU. No pretrained backbone (nothing is downloaded; group norm then replaces batch norm),
 # a 16-step horizon for RMB's ~50-step episodes, a smaller U-Net and 10 DDIM steps per query:
 # about 1 CPU second per training step at batch 8 with two 64x64 cameras (ACT: 0.53, MLP at
-# batch 16: 0.5, SARNN at batch 8 of 21-frame windows: 3.9; measured on Cloth, 2 loaded cores).
+# batch 16: 0.5, SARNN at batch 8 of 21-frame windows: 3.9 (10-frame windows, the recipe's: ~1.2);
+# measured on Cloth, 2 loaded cores).
 DIFFUSION_CPU_ARGS = (
     "--policy.pretrained_backbone_weights=null",
     "--policy.use_group_norm=true",
