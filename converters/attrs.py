@@ -19,6 +19,7 @@ import numpy as np
 
 from rmb_lerobot import keys as K
 from rmb_lerobot.errors import RmbFormatError
+from rmb_lerobot.pointcloud import checked_camera_pose
 
 FOVY_RANGE = (0.0, 180.0)  # degrees, both ends excluded
 _STRING_ATTRS = (K.ATTR_TASK_DESC, K.ATTR_DEMO_NAME, K.ATTR_ENV, K.ATTR_VERSION, K.ATTR_FORMAT)
@@ -68,16 +69,10 @@ def _fovy(value: Any) -> float:
 
 
 def _camera_pose(value: Any) -> list[list[float]]:
-    expected = "expected a 4x4 world-from-camera transform (finite, last row 0 0 0 1)"
     try:
-        matrix = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise _Bad(expected) from None
-    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
-        raise _Bad(expected)
-    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0]):
-        raise _Bad(expected)
-    return matrix.tolist()
+        return checked_camera_pose(value, "the pose")
+    except ValueError as error:
+        raise _Bad(f"expected a 4x4 world-from-camera transform: {error}") from None
 
 
 def _json_value(value: Any) -> Any:

@@ -357,6 +357,26 @@ def farthest_point_sample(
 MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])  # MuJoCo camera axes (y up, looks along -z)
 
 
+def checked_camera_pose(pose: Any, name: str) -> list[list[float]]:
+    """A 4x4 rigid world-from-camera transform as nested lists, or ValueError naming ``name`` and
+    the value: what DP3 configs and ``rmb-convert`` accept for ``<camera>_depth_image_pose``."""
+    try:
+        matrix = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        matrix = np.full(1, np.nan)
+    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
+        raise ValueError(f"{name} must be a finite 4x4 matrix (world from camera), got {pose!r}")
+    rotation = matrix[:3, :3]
+    if not np.allclose(matrix[3], [0, 0, 0, 1]) or not np.allclose(
+        rotation @ rotation.T, np.eye(3), atol=1e-5
+    ):
+        raise ValueError(
+            f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1), "
+            f"got {matrix.tolist()}"
+        )
+    return matrix.tolist()
+
+
 def opencv_camera_pose(position: ArrayLike, rotation: ArrayLike) -> np.ndarray:
     """4x4 world-from-camera pose in OpenCV axes from a MuJoCo camera's world pose.
 

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
-import numpy as np
 from lerobot.configs import NormalizationMode, PreTrainedConfig
 from lerobot.configs.types import FeatureType
 from lerobot.optim import AdamWConfig, DiffuserSchedulerConfig
 
 from rmb_lerobot import lerobot_names as N
+from rmb_lerobot.pointcloud import checked_camera_pose
 
 DEPTH_UNITS = {"mm": 1e-3, "m": 1.0}  # metres per depth unit
 DEFAULT_CAMERA_FOVY = 45.0  # RMB's fixed UR5e cameras (front, left, right); the hand camera: 62
@@ -42,25 +41,6 @@ DEFAULT_CROP = {
     "camera": ((-1.5, -1.5, 0.1), (1.5, 1.5, 1.5)),
     "world": ((-0.8, -0.5, 0.83), (0.35, 0.5, 1.6)),
 }
-
-
-def checked_camera_pose(pose: Any, name: str) -> list[list[float]]:
-    """A 4x4 rigid transform as nested lists, or ValueError naming ``name`` and the value."""
-    try:
-        matrix = np.asarray(pose, dtype=np.float64)
-    except (TypeError, ValueError):
-        matrix = np.full(1, np.nan)
-    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
-        raise ValueError(f"{name} must be a finite 4x4 matrix (world from camera), got {pose!r}")
-    rotation = matrix[:3, :3]
-    if not np.allclose(matrix[3], [0, 0, 0, 1]) or not np.allclose(
-        rotation @ rotation.T, np.eye(3), atol=1e-5
-    ):
-        raise ValueError(
-            f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1), "
-            f"got {matrix.tolist()}"
-        )
-    return matrix.tolist()
 
 
 @dataclass

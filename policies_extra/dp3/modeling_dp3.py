@@ -28,7 +28,7 @@ from rmb_lerobot.policies_extra.ema import EmaWeights
 from rmb_lerobot.policies_extra.observation_history import ObservationHistory
 
 from .configuration_dp3 import DP3Config, PointCloudUnetConfig
-from .point_cloud import DepthPointClouds, resolve_camera_fovy
+from .point_cloud import DepthPointClouds, resolve_camera
 
 POINT_CLOUD = "observation.point_cloud"  # (B, n_obs_steps, num_points, 3 or 6), made here
 
@@ -43,7 +43,7 @@ class DP3Policy(EmaWeights, ObservationHistory, PreTrainedPolicy):
         """``dataset_meta`` (from ``make_policy`` when training) supplies the camera's fovy."""
         super().__init__(config)
         config.validate_features()
-        resolve_camera_fovy(config, dataset_meta)
+        resolve_camera(config, dataset_meta)
         self.config = config
         self.point_clouds = DepthPointClouds(config)
         self.model = self.make_model(config)

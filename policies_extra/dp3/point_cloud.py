@@ -173,9 +173,7 @@ def fovy_from_dataset(meta: Any, camera: str) -> float | None:
 
 
 def resolve_camera_fovy(config: PointCloudUnetConfig, dataset_meta: Any | None) -> None:
-    """Fill ``config.camera_fovy`` from the dataset (or the default); check it if it is set.
-    Then the camera's pose likewise (:func:`resolve_camera_pose`): the policies call this one
-    function for the camera's intrinsics and extrinsics."""
+    """Fill ``config.camera_fovy`` from the dataset (or the default); check it if it is set."""
     camera = N.camera_of_image_key(config.depth_key).removesuffix(N.DEPTH_CAMERA_SUFFIX)
     recorded = fovy_from_dataset(dataset_meta, camera) if dataset_meta is not None else None
     if config.camera_fovy is None:
@@ -190,4 +188,10 @@ def resolve_camera_fovy(config: PointCloudUnetConfig, dataset_meta: Any | None) 
         raise ValueError(
             f"camera_fovy={config.camera_fovy} but the dataset records {recorded} for {camera!r}"
         )
+
+
+def resolve_camera(config: PointCloudUnetConfig, dataset_meta: Any | None) -> None:
+    """The depth camera's intrinsics and extrinsics for a point-cloud policy being built:
+    :func:`resolve_camera_fovy`, then :func:`resolve_camera_pose` (which also checks the crop)."""
+    resolve_camera_fovy(config, dataset_meta)
     resolve_camera_pose(config, dataset_meta)

@@ -36,7 +36,7 @@ from torch import Tensor, nn
 from torchvision.models.resnet import BasicBlock
 
 from rmb_lerobot.policies_extra.dp3.modeling_dp3 import PointNetEncoder, mlp
-from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds, resolve_camera_fovy
+from rmb_lerobot.policies_extra.dp3.point_cloud import DepthPointClouds, resolve_camera
 from rmb_lerobot.policies_extra.ema import EmaWeights
 from rmb_lerobot.policies_extra.flow_policy.modeling_flow_policy import per_sample
 from rmb_lerobot.policies_extra.observation_history import ObservationHistory
@@ -316,7 +316,7 @@ class ManiFlowPolicy(EmaWeights, ObservationHistory, PreTrainedPolicy):
         self.config = config
         self.point_clouds: DepthPointClouds | None = None
         if config.obs_encoder == "pointcloud":
-            resolve_camera_fovy(config, dataset_meta)
+            resolve_camera(config, dataset_meta)
             self.point_clouds = DepthPointClouds(config)
         self.model = ManiFlowModel(config)
         self.init_ema()  # the consistency targets and inference use it: always on
