@@ -349,7 +349,8 @@ def plot_bars(data: TableData, path: Path) -> None:
     ax.set_ylabel("success rate (%)")
     ax.set_ylim(0, 105)
     ax.set_title(data.title)
-    ax.legend(fontsize=8, ncols=min(n, 4))
+    # Outside the axes: inside, it covers the bars' feet (0 % and low cells) whatever its corner.
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     _save(fig, path)
     plt.close(fig)
 
