@@ -1,8 +1,6 @@
 """RoboManipBaselines environments (gymnasium), installed as ``rmb_lerobot.envs``.
 
-The OpenGL backend for headless rendering is chosen here, before anything imports ``mujoco``.
+Importing this package imports no simulator and changes no environment variable: each
+simulator's backend package sets up its own rendering when it is imported
+(:mod:`rmb_lerobot.envs.mujoco` chooses MuJoCo's OpenGL backend before ``mujoco`` loads).
 """
-
-from rmb_lerobot.envs.mujoco.gl import configure_gl_backend
-
-configure_gl_backend()

@@ -3,10 +3,13 @@
 A backend owns the world of one env: it builds the scene (robot, workspace, the task's props),
 resets it, applies joint commands, advances one control period, reads joint positions,
 velocities and wrenches, renders cameras (RGB + depth + fovy), does forward and inverse
-kinematics of each arm, and reports poses of named things for tasks' success tests and the
-scripted experts. :class:`rmb_lerobot.envs.base.RmbEnv` (the env core) does everything else
+kinematics of each arm, and, where it can, offers a scene view
+(:class:`~rmb_lerobot.envs.scene.SceneState`: poses of named things for tasks' success tests
+and the scripted experts). :class:`rmb_lerobot.envs.base.RmbEnv` (the env core) does everything else
 (gymnasium API, reset options, action modes, observations, RMB recording) the same for every
-backend. :class:`rmb_lerobot.envs.mujoco.backend.MujocoBackend` is the first implementation.
+backend. :class:`rmb_lerobot.envs.mujoco.backend.MujocoBackend` and
+:class:`rmb_lerobot.envs.pybullet.backend.PybulletBackend` implement it; the registry
+(:mod:`rmb_lerobot.envs.registry`) names each env's backend and builds it.
 
 Joint vectors are RMB's (per arm: arm joints, then the gripper value in command units;
 :meth:`~rmb_lerobot.envs.robots.Robot.joint_slices`). Poses are RMB's ``(x, y, z, qw, qx, qy,
@@ -17,67 +20,47 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from rmb_lerobot.envs.robots import Robot
+from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.envs.workspace import Workspace
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.tasks.base import Task
 
 
-class SceneState(ABC):
-    """Read-only, simulator-neutral view of the world: what success tests and experts read.
-
-    Names are those the task gave its objects when it built them.
-    """
-
-    @abstractmethod
-    def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation matrix (3, 3) of a body (copies)."""
-
-    @abstractmethod
-    def geom_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation matrix (3, 3) of a collision/visual shape."""
-
-    @abstractmethod
-    def site_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation matrix (3, 3) of a frame marker (site)."""
-
-    @abstractmethod
-    def joint_position(self, name: str) -> np.ndarray:
-        """Position coordinates of a (prop's) joint: (1,) for a hinge or slide."""
-
-    @abstractmethod
-    def joint_velocity(self, name: str) -> np.ndarray:
-        """Velocity coordinates of a (prop's) joint: (6,) for a free joint (linear velocity in
-        the world frame, then angular velocity)."""
-
-    @abstractmethod
-    def body_positions(self, names: Sequence[str]) -> np.ndarray:
-        """World positions (n, 3) of several bodies (e.g. granular particles)."""
-
-    @abstractmethod
-    def points(self, name: str) -> np.ndarray:
-        """World positions (n, 3) of a deformable object's points (cable, cloth, ring)."""
-
-
-class Backend(SceneState):
-    """One simulated or real world behind the env core.
+class Backend(ABC):
+    """One simulated or real world behind the env core: robot I/O, cameras, timing, and an
+    optional scene view.
 
     Attributes every backend sets: ``robot`` (the record), ``workspace``, ``task``,
-    ``cameras`` (every camera it can render, RMB names), ``control_dt`` (seconds per step).
+    ``cameras`` (every camera it can render, RMB names), ``image_size`` (``(width, height)``
+    of rendered images), ``control_dt`` (seconds per step: the env's frame rate follows it).
     """
 
+    simulator: ClassVar[str]  # key of rmb_lerobot.envs.simulators.SIMULATORS
     robot: Robot
     workspace: Workspace
     task: Task
     cameras: tuple[str, ...]
+    image_size: tuple[int, int]
     control_dt: float
+    tactile_sensors: tuple[str, ...] = ()  # RMB's rgb_tactile_names (fingertip images)
+
+    @property
+    def scene(self) -> SceneState | None:
+        """The world as success tests and scripted experts read it; None where nothing can be
+        read (a real arm: no success test, no privileged expert)."""
+        return None
 
     # ---------------------------------------------------------------- episode
+    def seed(self, rng: np.random.Generator) -> None:  # noqa: B027 - optional hook
+        """Called with the env's generator before every :meth:`reset`: a backend that draws
+        random numbers (sensor noise) seeds its own generator from it; others ignore it."""
+
     @abstractmethod
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
         """Start an episode: the task's objects shifted by ``world_offset`` (world frame),
@@ -129,6 +112,24 @@ class Backend(SceneState):
     def fovy(self, camera: str) -> float:
         """Vertical field of view of a camera in degrees (RMB's only stored intrinsic)."""
 
+    def image_shape(self, camera: str) -> tuple[int, int]:
+        """``(height, width)`` of a camera's or tactile sensor's images."""
+        width, height = self.image_size
+        return height, width
+
+    def render_tactile(self, sensors: Sequence[str]) -> dict[str, np.ndarray]:
+        """RGB images ``uint8 (H, W, 3)`` of fingertip tactile sensors (:attr:`tactile_sensors`).
+
+        Raises:
+            ValueError: a name that is not one of this backend's tactile sensors.
+        """
+        unknown = [s for s in sensors if s not in self.tactile_sensors]
+        if unknown:
+            raise ValueError(
+                f"unknown tactile sensors {unknown}; available: {list(self.tactile_sensors)}"
+            )
+        return {}
+
     def camera_pose(self, camera: str) -> np.ndarray | None:
         """4x4 world-from-camera pose (metres, OpenCV axes: x right, y down, z forward) of a
         camera fixed to the world; None for a camera that moves (on the robot) or when the
@@ -149,5 +150,5 @@ class Backend(SceneState):
     def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """A world position (3,) and rotation matrix (3, 3) as a pose in the arm's root frame."""
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 - optional: not every backend holds resources
         """Free rendering contexts, connections."""

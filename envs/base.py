@@ -1,9 +1,9 @@
 """The env core: one gymnasium env for every robot, task and backend.
 
-:class:`RmbEnv` composes a :class:`~rmb_lerobot.envs.tasks.base.Task`, a robot record
-(:mod:`rmb_lerobot.envs.robots`) and a backend (:mod:`rmb_lerobot.envs.backend`; MuJoCo today)
-and owns everything that does not depend on the simulator: the gymnasium API, the reset-option
-protocol, the action mode (:mod:`rmb_lerobot.envs.actions`), LeRobot's observation contract
+:class:`RmbEnv` composes a :class:`~rmb_lerobot.envs.tasks.base.Task`, a backend
+(:mod:`rmb_lerobot.envs.backend`: MuJoCo, PyBullet, or anything that implements it) with its
+robot record (:mod:`rmb_lerobot.envs.robots`), and owns everything that does not depend on the
+simulator: the gymnasium API, the reset-option protocol, the action mode (:mod:`rmb_lerobot.envs.actions`), LeRobot's observation contract
 (``pixels``, ``agent_pos``, optional ``depth``), success and termination, and what recorders
 get: every RMB key through :meth:`RmbEnv.rmb_step_data` and the episode attributes through
 :meth:`RmbEnv.rmb_attrs`, which keeps the observation space small.
@@ -21,119 +21,85 @@ from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth_base import metres_to_mm
 from rmb_lerobot.envs.actions import ACTION_MODES, CommandState, make_action_mode
 from rmb_lerobot.envs.backend import Backend
-from rmb_lerobot.envs.registry import SIMULATORS, rmb_env_name
-from rmb_lerobot.envs.robots import Robot, robot_for
+from rmb_lerobot.envs.images import DEFAULT_IMAGE_SIZE, RMB_IMAGE_SIZE
+from rmb_lerobot.envs.simulators import frames_per_second, rmb_env_name
 from rmb_lerobot.envs.tasks.base import Task
-from rmb_lerobot.envs.workspace import Workspace
 
-__all__ = ["ACTION_MODES", "DEFAULT_IMAGE_SIZE", "RMB_IMAGE_SIZE", "RmbEnv", "make_backend"]
-
-DEFAULT_IMAGE_SIZE = (128, 128)
-RMB_IMAGE_SIZE = (640, 480)
-# RMB's control period, 0.004 s x 8 (its recorder reports int(1 / 0.032) = 31 frames per second).
-RMB_CONTROL_DT = 0.032
-
-
-def make_backend(
-    simulator: str, task: Task, robot: Robot, workspace: Workspace, **options: Any
-) -> Backend:
-    """The backend of ``simulator`` for this task, robot and workspace (options: its own)."""
-    if simulator == "mujoco":
-        from rmb_lerobot.envs.mujoco.backend import MujocoBackend
-
-        return MujocoBackend(task, robot, workspace, **options)
-    raise ValueError(f"unknown simulator {simulator!r}; known: {sorted(SIMULATORS)}")
+__all__ = ["ACTION_MODES", "DEFAULT_IMAGE_SIZE", "RMB_IMAGE_SIZE", "RmbEnv"]
 
 
 class RmbEnv(gym.Env):
-    """An RMB task on a robot in a simulator, with a gymnasium API and LeRobot's observations.
+    """An RMB task on a robot behind a backend, with a gymnasium API and LeRobot's observations.
 
-    Parameters
-    ----------
-    task:
-        The task (props, world variations, success test), placed in its workspace (the
-        table and fixed cameras of the scene).
-    robot:
-        The robot record or its short name (default: RMB's UR5e + Robotiq 2F-85).
-    simulator:
-        The backend to build (``"mujoco"``).
-    action_mode:
-        ``"joint"`` (default), ``"eef_abs"`` or ``"eef_rel"`` (:mod:`rmb_lerobot.envs.actions`).
-    cameras:
-        Cameras rendered into the observation, any of :attr:`available_cameras`; ``()`` for none
-        (fast: physics only). Default: all of them (RMB's four for the UR5e).
-    image_size:
-        ``(width, height)`` of every camera image (RMB records 640x480).
-    depth:
-        Also render depth: ``observation["depth"]`` (uint16 mm) and float metres for recorders.
-    random_shift:
-        Default scale (m) of the uniform random object shift added to the world's offset;
-        ``reset(options={"random_shift": s})`` overrides it for one episode.
-    terminate_on_success:
-        End the episode (``terminated``) when the success criterion holds.
-    render_camera:
-        The camera :meth:`render` shows.
-    backend_options:
-        Passed to the backend (MuJoCo: ``frame_skip``, ``shadows``, ``reflections``,
-        ``antialias``, ``visual_mesh_error``, ``tactile``; see
-        :class:`~rmb_lerobot.envs.mujoco.backend.MujocoBackend`).
+    The env core receives its backend (built by the registry,
+    :func:`rmb_lerobot.envs.registry.compose`, from the simulator its table row names) and never
+    chooses one: a fake backend runs it as well as MuJoCo, PyBullet or a real arm. The frame
+    rate (``metadata["render_fps"]``) follows the backend's control period.
+
+    Args:
+        task: The task (world variations, success test), placed in its workspace (the table and
+            fixed cameras of the scene).
+        backend: The world the task runs in (its robot record is the env's robot).
+        action_mode: ``"joint"`` (default), ``"eef_abs"`` or ``"eef_rel"``
+            (:mod:`rmb_lerobot.envs.actions`).
+        cameras: Cameras rendered into the observation, any of :attr:`available_cameras`; ``()``
+            for none (fast: physics only). Default: all of them (RMB's four for the UR5e).
+        depth: Also render depth: ``observation["depth"]`` (uint16 mm) and float metres for
+            recorders.
+        random_shift: Default scale (m) of the uniform random object shift added to the world's
+            offset; ``reset(options={"random_shift": s})`` overrides it for one episode.
+        terminate_on_success: End the episode (``terminated``) when the success criterion holds.
+        render_mode: ``"rgb_array"`` or None.
+        render_camera: The camera :meth:`render` shows.
+
+    Raises:
+        ValueError: an unknown action mode, render mode or camera, or a negative shift.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
-        "render_modes": ["rgb_array"],
-        "render_fps": int(1 / RMB_CONTROL_DT),
-    }
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"]}
 
     def __init__(
         self,
         task: Task,
-        robot: Robot | str = "ur5e",
+        backend: Backend,
         *,
-        simulator: str = "mujoco",
         action_mode: str = "joint",
         cameras: Sequence[str] | None = None,
-        image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE,
         depth: bool = False,
         random_shift: float = 0.0,
         terminate_on_success: bool = True,
         render_mode: str | None = "rgb_array",
         render_camera: str = "front",
-        **backend_options: Any,
     ):
         if action_mode not in ACTION_MODES:
             raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        width, height = (int(v) for v in image_size)
-        if width <= 0 or height <= 0:
-            raise ValueError(f"image_size must be two positive ints (W, H), got {image_size!r}")
         if random_shift < 0:
             raise ValueError(f"random_shift must be >= 0 metres, got {random_shift!r}")
         self.task = task
-        self.robot = robot_for(robot) if isinstance(robot, str) else robot
-        self.simulator = simulator
-        self.rmb_env_name = rmb_env_name(simulator, self.robot, task.name)
-        self.image_size = (width, height)
+        self.sim = backend
+        self.robot = backend.robot
+        self.simulator = backend.simulator
+        self.rmb_env_name = rmb_env_name(self.simulator, self.robot, task.name)
+        self.image_size = backend.image_size
         self.use_depth = bool(depth)
         self.random_shift = float(random_shift)
         self.terminate_on_success = terminate_on_success
         self.render_mode = render_mode
         self.render_camera = render_camera
+        self.metadata = {**self.metadata, "render_fps": frames_per_second(backend.control_dt)}
 
-        self.sim = make_backend(
-            simulator,
-            task,
-            self.robot,
-            task.workspace,
-            image_size=self.image_size,
-            **backend_options,
-        )
-        self.available_cameras = self.sim.cameras
+        self.available_cameras = (*backend.cameras, *backend.tactile_sensors)
         cameras = self.available_cameras if cameras is None else tuple(cameras)
         for name in (*cameras, *([render_camera] if render_mode else [])):
             if name not in self.available_cameras:
                 raise ValueError(f"unknown camera {name!r}; available: {self.available_cameras}")
         self.camera_names = cameras
+        # Fingertip tactile images (RMB's rgb_tactile_names) travel as cameras in the
+        # observation, so policies see them as images; recorders get them apart.
+        self.tactile_names = tuple(c for c in cameras if c in backend.tactile_sensors)
+        self._optical_cameras = tuple(c for c in cameras if c not in backend.tactile_sensors)
         self.control_dt = self.sim.control_dt
         self.task_description = task.description
         self._max_episode_steps = task.max_episode_steps
@@ -159,7 +125,6 @@ class RmbEnv(gym.Env):
 
     # ------------------------------------------------------------------ spaces
     def _make_observation_space(self) -> gym.spaces.Dict:
-        width, height = self.image_size
         n = self.robot.layout.num_joints
         spaces: dict[str, gym.spaces.Space] = {
             "agent_pos": gym.spaces.Box(-np.inf, np.inf, (n,), dtype=np.float32)
@@ -167,17 +132,17 @@ class RmbEnv(gym.Env):
         if self.camera_names:
             spaces["pixels"] = gym.spaces.Dict(
                 {
-                    cam: gym.spaces.Box(0, 255, (height, width, 3), dtype=np.uint8)
+                    cam: gym.spaces.Box(0, 255, (*self.sim.image_shape(cam), 3), dtype=np.uint8)
                     for cam in self.camera_names
                 }
             )
-            if self.use_depth:
+            if self.use_depth and self._optical_cameras:
                 spaces["depth"] = gym.spaces.Dict(
                     {
                         cam: gym.spaces.Box(
-                            0, np.iinfo(np.uint16).max, (height, width), dtype=np.uint16
+                            0, np.iinfo(np.uint16).max, self.sim.image_shape(cam), dtype=np.uint16
                         )
-                        for cam in self.camera_names
+                        for cam in self._optical_cameras
                     }
                 )
         return gym.spaces.Dict(spaces)
@@ -186,8 +151,8 @@ class RmbEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
-        """Start an episode. ``options``: ``world_idx`` (0..5; default drawn from the env's
-        generator), ``random_shift`` (metres; default the constructor's) and the task's own
+        """Start an episode. ``options``: ``world_idx`` (0 .. the task's ``num_worlds`` - 1;
+        default drawn from the env's generator), ``random_shift`` (metres; default the constructor's) and the task's own
         (``Task.reset_options``, e.g. Pick's ``instruction``). Options LeRobot's rollout loop
         adds (``lerobot_*``, e.g. ``lerobot_new_rollout``) are ignored."""
         super().reset(seed=seed)
@@ -201,17 +166,18 @@ class RmbEnv(gym.Env):
         self.task_description = self.task.description
         world_idx = options.get("world_idx")
         if world_idx is None:
-            world_idx = int(self.np_random.integers(len(self.task.world_offsets)))
+            world_idx = int(self.np_random.integers(self.task.num_worlds))
         shift = float(options.get("random_shift", self.random_shift))
         self.world_offset = self.task.world_offset(world_idx, self.np_random, shift)
-        self.world_idx = int(world_idx)
+        self.world_idx = self.task.world_idx = int(world_idx)
 
+        self.sim.seed(self.np_random)
         self.sim.reset(self.world_offset, self.home_command)
 
         self._command = self.home_command.copy()
         self._prev_command = self.home_command.copy()
         self._command_eef_poses = self._eef_poses(self.home_command)
-        self._success = self.task.is_success(self.sim)
+        self._success = self._is_success()
         self._reward = float(self._success)
         obs = self._observe()
         return obs, {"is_success": self._success, "world_idx": self.world_idx}
@@ -223,11 +189,17 @@ class RmbEnv(gym.Env):
         self._command_eef_poses = self._eef_poses(command)
         self.sim.apply_command(command)
         self.sim.step()
-        self._success = self.task.is_success(self.sim)
+        self._success = self._is_success()
         self._reward = float(self._success)
         obs = self._observe()
         terminated = self._success and self.terminate_on_success
         return obs, self._reward, terminated, False, {"is_success": self._success}
+
+    def _is_success(self) -> bool:
+        """The task's success test on the backend's scene; False where there is no scene (a
+        real arm: success is the operator's call)."""
+        scene = self.sim.scene
+        return False if scene is None else bool(self.task.is_success(scene))
 
     def render(self) -> np.ndarray | None:
         """RGB image of ``render_camera`` (reusing this step's frame when it was rendered)."""
@@ -282,14 +254,16 @@ class RmbEnv(gym.Env):
 
     def _observe(self) -> dict[str, Any]:
         self._rgb, self._depth_m = {}, {}
-        if self.camera_names:
+        if self._optical_cameras:
             self._rgb, self._depth_m = self.sim.render(
-                self.camera_names, rgb=True, depth=self.use_depth
+                self._optical_cameras, rgb=True, depth=self.use_depth
             )
+        if self.tactile_names:
+            self._rgb.update(self.sim.render_tactile(self.tactile_names))
         obs: dict[str, Any] = {"agent_pos": self.measured_joint_pos().astype(np.float32)}
         if self.camera_names:
-            obs["pixels"] = dict(self._rgb)
-            if self.use_depth:
+            obs["pixels"] = {cam: self._rgb[cam] for cam in self.camera_names}
+            if self._depth_m:
                 obs["depth"] = {cam: metres_to_mm(depth) for cam, depth in self._depth_m.items()}
         return obs
 
@@ -306,8 +280,8 @@ class RmbEnv(gym.Env):
 
     def fovy(self, camera: str) -> float:
         """Vertical field of view of a camera in degrees (RMB's only stored intrinsic)."""
-        if camera not in self.available_cameras:
-            raise ValueError(f"unknown camera {camera!r}; available: {self.available_cameras}")
+        if camera not in self.sim.cameras:
+            raise ValueError(f"unknown camera {camera!r}; available: {self.sim.cameras}")
         return self.sim.fovy(camera)
 
     # ------------------------------------------------------------------ RMB recording
@@ -350,9 +324,11 @@ class RmbEnv(gym.Env):
             K.ATTR_ENV: self.rmb_env_name + "Env",
             K.ATTR_TASK_DESC: self.task_description,
             K.ATTR_WORLD_IDX: self.world_idx,
-            K.ATTR_CAMERA_NAMES: list(self.camera_names),
+            K.ATTR_CAMERA_NAMES: list(self._optical_cameras),
         }
-        for cam in self.camera_names:
+        if self.tactile_names:
+            attrs[K.ATTR_RGB_TACTILE_NAMES] = list(self.tactile_names)
+        for cam in self._optical_cameras:
             attrs[K.fovy_attr(cam)] = self.fovy(cam)
             pose = self.sim.camera_pose(cam) if self.use_depth else None
             if pose is not None:  # fixed cameras only: a moving camera has no single pose

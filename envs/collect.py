@@ -37,9 +37,6 @@ from rmb_lerobot.staging import remove_stale
 
 logger = logging.getLogger(__name__)
 
-NUM_WORLDS = 6
-
-
 @dataclass(frozen=True)
 class CollectConfig:
     """What to record; picklable, so workers can rebuild the env from it."""
@@ -48,7 +45,7 @@ class CollectConfig:
     out: Path
     episodes: int
     fmt: str = "rmb"
-    world_idx: tuple[int, ...] = tuple(range(NUM_WORLDS))
+    world_idx: tuple[int, ...] | None = None  # None: every world of the task
     cameras: tuple[str, ...] | None = None  # None: every camera of the env (entry.cameras)
     image_size: tuple[int, int] = (640, 480)
     depth: bool = True
@@ -63,6 +60,10 @@ class CollectConfig:
     cycle_variants: bool = False
     # Record RMB's fingertip tactile grids (left_tactile_sensor, right_tactile_sensor: 5 x 8).
     tactile: bool = False
+
+    def __post_init__(self) -> None:
+        if self.world_idx is None:
+            object.__setattr__(self, "world_idx", tuple(range(entry_for(self.env).num_worlds)))
 
     def episode_path(self, index: int, world_idx: int) -> Path:
         entry = entry_for(self.env)

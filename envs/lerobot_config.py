@@ -20,10 +20,12 @@ from lerobot.utils.constants import OBS_STR
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.envs.registry import ENVS, EnvEntry, entry_for, make_env
+from rmb_lerobot.envs.simulators import SIMULATORS
 from rmb_lerobot.pose import POLICY_POSE_DIM, REL_POSE_DIM
 
-# RMB's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).
-RMB_FPS = 31
+# MuJoCo's control rate is 31.25 Hz; LeRobot wants an integer (RMB itself reports int(31.25)).
+# Each registered type takes its own simulator's rate (EnvEntry.fps: 33 for PyBullet).
+RMB_FPS = SIMULATORS["mujoco"].fps
 DEFAULT_CAMERAS = ("front", "hand")  # RMB's default policy cameras for the UR5e tasks
 
 
@@ -102,10 +104,11 @@ class RmbEnvConfig(EnvConfig):
             "action_mode": self.action_mode,
             "random_shift": self.random_shift,
             "depth": self.depth,
-            "tactile": self.tactile,
             "render_mode": self.render_mode,
             "render_camera": self.cameras[0] if self.cameras else "front",
             "max_episode_steps": self.episode_length,
+            # MuJoCo's fingertip grids (a backend option); PyBullet's tactile images are cameras.
+            **({"tactile": True} if self.tactile else {}),
         }
 
     def create_envs(
@@ -233,12 +236,15 @@ def make_lerobot_env(
 
 def _register(entry: EnvEntry) -> type[RmbEnvConfig]:
     name = "".join(part.capitalize() for part in entry.lerobot_type.split("_")) + "Env"
-    # RMB's default policy cameras: the scene's first (front) and the robot's own (hand).
-    cameras = (entry.workspace.cameras[0].name, *entry.robot_record.cameras)
+    # RMB's default policy cameras: the scene's first (front), the robot's own (hand) and its
+    # fingertip tactile images.
+    robot = entry.robot_record
+    cameras = (entry.workspace.cameras[0].name, *robot.cameras, *robot.tactile_sensors)
     cls = make_dataclass(
         name,
         [
             ("task", str | None, field(default=entry.rmb_env_name)),
+            ("fps", int, field(default=entry.fps)),
             ("cameras", list[str], field(default_factory=lambda: list(cameras))),
         ],
         bases=(RmbEnvConfig,),

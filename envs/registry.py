@@ -14,43 +14,29 @@ robots' entries are named ``<robot>_<task>`` (``xarm7_cable``).
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 
-from rmb_lerobot.envs.robots import ROBOTS, Robot
-from rmb_lerobot.envs.workspace import DUAL_TABLE, RMB_TABLE, XARM_TABLE, Workspace
+from rmb_lerobot.envs.robots import ROBOTS, Robot, robot_for
+from rmb_lerobot.envs.simulators import SIMULATORS, load_target, rmb_env_name, simulator_for
+from rmb_lerobot.envs.workspace import (
+    DUAL_TABLE,
+    RMB_TABLE,
+    TACTO_FLOOR,
+    XARM_TABLE,
+    Workspace,
+)
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.base import RmbEnv
+    from rmb_lerobot.envs.tasks.base import Task
 
 GYM_NAMESPACE = "rmb_lerobot"
 GYM_VERSION = "v0"
 LEROBOT_TYPE_PREFIX = "rmb_"
 DEFAULT_ROBOT = "ur5e"  # the robot a bare task name means (RMB's own default)
-
-
-@dataclass(frozen=True)
-class Simulator:
-    """A simulator (or real hardware): its RMB spelling and its part in LeRobot type names."""
-
-    name: str
-    rmb_name: str  # RMB's prefix of environment names, e.g. "Mujoco"
-    type_prefix: str  # inserted after "rmb_" in LeRobot types ("" for MuJoCo, RMB's default)
-
-
-SIMULATORS: dict[str, Simulator] = {sim.name: sim for sim in (Simulator("mujoco", "Mujoco", ""),)}
-
-
-def _camel(name: str) -> str:
-    return "".join(part.capitalize() for part in name.split("_"))
-
-
-def rmb_env_name(simulator: str, robot: Robot, task: str) -> str:
-    """RMB's environment class name without ``Env``: ``MujocoUR5eInsert``."""
-    return f"{SIMULATORS[simulator].rmb_name}{robot.rmb_name}{_camel(task)}"
 
 
 @dataclass(frozen=True)
@@ -106,27 +92,66 @@ class EnvEntry:
         return self.robot
 
     @property
+    def num_worlds(self) -> int:
+        """How many worlds (``world_idx`` values) the task has here (imports the neutral
+        task module, which imports no simulator)."""
+        return self.load_task_class()(self.workspace).num_worlds
+
+    @property
+    def fps(self) -> int:
+        """Frames per second of this env's LeRobot type and converted datasets: its simulator's
+        control period (31 for MuJoCo, 33 for PyBullet)."""
+        return SIMULATORS[self.simulator].fps
+
+    @property
     def cameras(self) -> tuple[str, ...]:
         """Every camera of the env: the workspace's fixed ones, then the robot's."""
         return (*self.workspace.camera_names, *self.robot_record.cameras)
 
     def make(self, **kwargs: Any) -> RmbEnv:
-        """This entry's env core (keyword arguments: :class:`RmbEnv`'s), without time limit."""
-        from rmb_lerobot.envs.base import RmbEnv
-
+        """This entry's env core, without time limit (keyword arguments: :func:`compose`'s)."""
         task = self.load_task_class()(self.workspace)
-        return RmbEnv(task, self.robot_record, simulator=self.simulator, **kwargs)
+        return compose(task, self.robot_record, self.simulator, **kwargs)
 
     def load_task_class(self) -> type:
-        return _load(self.task_class)
+        return load_target(self.task_class)
 
     def load_expert_class(self) -> type:
-        return _load(self.expert_class)
+        return load_target(self.expert_class)
 
 
-def _load(target: str) -> Any:
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)
+def compose(
+    task: Task, robot: Robot | str = DEFAULT_ROBOT, simulator: str = "mujoco", **kwargs: Any
+) -> RmbEnv:
+    """An env core: ``task`` on ``robot`` in ``simulator``'s backend.
+
+    Args:
+        task: The task, placed in its workspace.
+        robot: The robot record or its short name.
+        simulator: Key of :data:`~rmb_lerobot.envs.simulators.SIMULATORS`; its record names
+            the backend class and that backend's options dataclass.
+        **kwargs: The backend's options (fields of its options dataclass, e.g. MuJoCo's
+            ``image_size``, ``frame_skip``, ``tactile``) and the env core's
+            (:class:`~rmb_lerobot.envs.base.RmbEnv`: ``action_mode``, ``cameras``, ...).
+
+    Returns:
+        The :class:`~rmb_lerobot.envs.base.RmbEnv`.
+
+    Raises:
+        ValueError: an unknown simulator or robot, or a bad option.
+        TypeError: a keyword neither the backend nor the env core takes.
+    """
+    from rmb_lerobot.envs.base import RmbEnv
+
+    sim = simulator_for(simulator)
+    robot = robot_for(robot) if isinstance(robot, str) else robot
+    options, env_kwargs = sim.split_options(kwargs)
+    backend = sim.backend_class()(task, robot, task.workspace, options)
+    try:
+        return RmbEnv(task, backend, **env_kwargs)
+    except BaseException:
+        backend.close()
+        raise
 
 
 def _entry(
@@ -148,6 +173,19 @@ def _entry(
         task,
         f"{tasks}.{module}:{task_class}",
         f"{experts}.{expert_module or module}:{expert_class}",
+        workspace,
+    )
+
+
+def _tacto_entry(task: str, task_class: str, expert_class: str, workspace: Workspace) -> EnvEntry:
+    """A PyBullet entry of RMB's TACTO Sawyer tasks: task ``tasks/tacto_<task>.py``, expert
+    ``experts/tacto_<task>.py``."""
+    return EnvEntry(
+        "pybullet",
+        "sawyer",
+        task,
+        f"rmb_lerobot.envs.tasks.tacto_{task}:{task_class}",
+        f"rmb_lerobot.envs.experts.tacto_{task}:{expert_class}",
         workspace,
     )
 
@@ -179,6 +217,8 @@ ENVS: dict[str, EnvEntry] = {
             workspace=DUAL_TABLE,
             expert_module="dual_cable",
         ),
+        # RMB's PyBullet TACTO envs: the Sawyer with DIGIT fingertip sensors.
+        _tacto_entry("grasp", "TactoGraspTask", "TactoGraspExpert", TACTO_FLOOR),
     )
 }
 """Every environment by short name (:attr:`EnvEntry.name`): the source of truth for names."""

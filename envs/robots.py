@@ -57,12 +57,29 @@ class Gripper:
     closed: float  # command value of the fully closed gripper
     measured_scale: float
     home: float | None = None  # command at episode start; None: open
+    # Per joint +1 or -1: the measured value is measured_scale * mean(sign * position), so
+    # fingers that move in opposite directions (a WSG50's: left -g, right +g) both count
+    # (RMB's TACTO envs: the mean of |finger positions|). None: every joint +1.
+    joint_signs: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if not self.joints:
             raise ValueError("a gripper needs at least one joint to measure")
         if self.open == self.closed:
             raise ValueError(f"gripper open and closed values are both {self.open}")
+        if self.joint_signs is not None and (
+            len(self.joint_signs) != len(self.joints)
+            or any(s not in (1.0, -1.0) for s in self.joint_signs)
+        ):
+            raise ValueError(
+                f"gripper joint_signs must be one +1 or -1 per joint {self.joints}, got "
+                f"{self.joint_signs}"
+            )
+
+    @property
+    def signs(self) -> tuple[float, ...]:
+        """Per joint the sign its position enters the measured value with."""
+        return self.joint_signs if self.joint_signs is not None else (1.0,) * len(self.joints)
 
     @property
     def command_range(self) -> tuple[float, float]:
@@ -96,6 +113,8 @@ class Arm:
     hand_frame: str
     wrench_frame: str | None = None
     hand_camera: HandCamera | None = None
+    # Fingertip tactile image sensors on the gripper (RMB's rgb_tactile_names), left first.
+    tactile_sensors: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if len(self.home) != len(self.joints):
@@ -128,7 +147,8 @@ class Robot:
     def __post_init__(self) -> None:
         if not self.arms:
             raise ValueError(f"robot {self.name!r} has no arm")
-        for what, names in (("arm", [a.name for a in self.arms]), ("camera", self.cameras)):
+        sensors = (*self.cameras, *self.tactile_sensors)
+        for what, names in (("arm", [a.name for a in self.arms]), ("camera", sensors)):
             if len(set(names)) != len(names):
                 raise ValueError(f"robot {self.name!r}: {what} names repeat: {names}")
 
@@ -145,6 +165,11 @@ class Robot:
     def cameras(self) -> tuple[str, ...]:
         """The robot's own cameras (hand cameras), in arm order."""
         return tuple(arm.hand_camera.name for arm in self.arms if arm.hand_camera is not None)
+
+    @property
+    def tactile_sensors(self) -> tuple[str, ...]:
+        """The robot's fingertip tactile image sensors, in arm order."""
+        return tuple(name for arm in self.arms for name in arm.tactile_sensors)
 
     def joint_slices(self) -> tuple[tuple[slice, int], ...]:
         """Per arm: the slice of its arm joints in the joint vector, and its gripper's index."""
@@ -357,7 +382,41 @@ PANDA = Robot(
     ),
 )
 
-ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E, UR5E_DUAL, XARM7, PANDA)}
+SAWYER = Robot(
+    name="sawyer",
+    rmb_name="Sawyer",
+    arms=(
+        Arm(
+            name="arm",
+            joints=tuple(f"right_j{i}" for i in range(7)),
+            # RMB's TactoSawyerGrasp/Insert start pose (TactoSawyerGraspEnv.py:16-28).
+            home=(0.0, -1.24, -0.58, 2.18, 0.27, 0.7, 1.0),
+            # The WSG50's prismatic fingers go to (-g, +g) for command g (metres, larger is
+            # wider; RMB's joint limits 0.0027..0.055); RMB measures mean |finger position|.
+            gripper=Gripper(
+                joints=("base_joint_gripper_left", "base_joint_gripper_right"),
+                open=0.055,
+                closed=0.0027,
+                measured_scale=1.0,
+                home=0.02,
+                joint_signs=(-1.0, 1.0),
+            ),
+            # RMB asks for the base at (0, 0, 0.1); pybulletX puts the base's centre of mass
+            # there, so the root link frame is at (0.1, 0, 0.03) (envs/pybullet/sawyer.py).
+            mount=Pose(pos=(0.1, 0.0, 0.03)),
+            root_frame="base",
+            eef_frame="right_l6",  # RMB's IK end effector (Pinocchio joint 7 of sawyer.urdf)
+            tcp_frame="tool_centre",  # between the two DIGIT gel pads
+            hand_frame="right_hand",
+            wrench_frame="right_hand",  # RMB's F/T joint
+            tactile_sensors=("tactile_left", "tactile_right"),
+        ),
+    ),
+)
+"""RMB's TACTO robot: a Rethink Sawyer with a Weiss WSG50 gripper and a DIGIT tactile sensor on
+each fingertip (PyBullet)."""
+
+ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E, UR5E_DUAL, XARM7, PANDA, SAWYER)}
 """Every robot by short name."""
 
 

@@ -108,4 +108,39 @@ DUAL_TABLE = Workspace(
 )
 """RMB's UR5e table seen by a dual-arm robot: the front/left/right views and a rear one."""
 
-WORKSPACES: dict[str, Workspace] = {ws.name: ws for ws in (RMB_TABLE, XARM_TABLE, DUAL_TABLE)}
+# RMB's TACTO scenes (PyBullet): objects on the floor in front of the Sawyer, no table. Their
+# "front" camera orbits a target (TactoSawyerEnvBase.py:231-239: computeViewMatrixFromYawPitchRoll
+# with yaw 90, pitch -30, fov 60); here as the position that view puts the camera at (distance
+# along the view direction, checked against PyBullet's matrix in tests/envs/pybullet).
+TACTO_FLOOR = Workspace(
+    name="tacto_floor",
+    table=Table(top_centre=(0.5, 0.0, 0.0), half_size=(1.0, 1.0)),
+    cameras=(
+        SceneCamera(
+            "front",
+            pos=(0.5 + 0.4 * np.cos(np.pi / 6), 0.0, 0.05 + 0.4 * 0.5),
+            lookat=(0.5, 0.0, 0.05),
+            fovy=60.0,
+        ),
+    ),
+)
+"""The floor of RMB's TactoSawyerGrasp and TactoSawyerInsert (front camera 0.4 m from (0.5, 0,
+0.05))."""
+
+TACTO_SPOON_FLOOR = Workspace(
+    name="tacto_spoon_floor",
+    table=TACTO_FLOOR.table,
+    cameras=(
+        SceneCamera(
+            "front",
+            pos=(0.8 + 1.0 * np.cos(np.pi / 6), 0.0, 0.05 + 1.0 * 0.5),
+            lookat=(0.8, 0.0, 0.05),
+            fovy=60.0,
+        ),
+    ),
+)
+"""The floor of RMB's TactoSawyerSpoon: its own front camera, 1 m from (0.8, 0, 0.05)."""
+
+WORKSPACES: dict[str, Workspace] = {
+    ws.name: ws for ws in (RMB_TABLE, XARM_TABLE, DUAL_TABLE, TACTO_FLOOR, TACTO_SPOON_FLOOR)
+}

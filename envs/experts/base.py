@@ -6,7 +6,7 @@ object poses from the simulator (privileged information a learned policy does no
 
 Experts are written against the robot record's TCP and gripper (:mod:`rmb_lerobot.envs.robots`:
 the arm's eef and tool-centre-point frames, the gripper's open and closed commands) and read
-the world through the backend's simulator-neutral :class:`~rmb_lerobot.envs.backend.SceneState`,
+the world through the backend's simulator-neutral :class:`~rmb_lerobot.envs.scene.SceneState`,
 so one expert serves every robot that shares a task where the geometry allows. They drive one
 arm (:attr:`ScriptedExpert.arm_index`, the first).
 
@@ -27,6 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.pose import pose_to_policy, relative_pose
 
 
@@ -39,6 +40,21 @@ def top_down_rotation(across: np.ndarray, current: Rotation) -> Rotation:
         across = -across
     down = np.array([0.0, 0.0, -1.0])
     return Rotation.from_matrix(np.column_stack([across, np.cross(down, across), down]))
+
+
+def scene_of(env: RmbEnv) -> SceneState:
+    """The scene an expert reads (privileged state).
+
+    Raises:
+        ValueError: the env's backend has no scene (a real arm): no scripted expert can run.
+    """
+    scene = env.sim.scene
+    if scene is None:
+        raise ValueError(
+            f"{env.rmb_env_name} has no scene view (a {env.simulator} backend): scripted "
+            "experts read object poses and cannot run on it"
+        )
+    return scene
 
 
 @dataclass(frozen=True)
@@ -74,6 +90,7 @@ class ScriptedExpert(ABC):
     ):
         self.env: RmbEnv = env.unwrapped
         self.sim: Backend = self.env.sim
+        self.scene: SceneState = scene_of(self.env)
         self.arm = self.env.robot.arms[self.arm_index]
         self._arm_joints, self.gripper_index = self.env.robot.joint_slices()[self.arm_index]
         # The gripper's open and closed commands, from the robot record.
@@ -114,12 +131,12 @@ class ScriptedExpert(ABC):
     # ------------------------------------------------------------------ helpers
     def eef_world(self) -> tuple[np.ndarray, Rotation]:
         """Measured eef position and orientation in the world frame."""
-        pos, rot = self.sim.site_pose(self.arm.eef_frame)
+        pos, rot = self.scene.site_pose(self.arm.eef_frame)
         return pos, Rotation.from_matrix(rot)
 
     def tcp_world(self) -> tuple[np.ndarray, np.ndarray]:
         """Measured tool centre point: world position and rotation matrix."""
-        return self.sim.site_pose(self.arm.tcp_frame)
+        return self.scene.site_pose(self.arm.tcp_frame)
 
     def table_z(self) -> float:
         """Height of the workspace's table top (m)."""

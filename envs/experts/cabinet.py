@@ -124,7 +124,7 @@ class CabinetSlideExpert(CabinetExpert):
 
     def _hook_point(self, back: float = 0.0) -> np.ndarray:
         """Pinch point beside the tab (its -y side), ``back`` further from the door."""
-        handle = self.sim.geom_pose(HANDLE)[0]
+        handle = self.scene.geom_pose(HANDLE)[0]
         face_x = handle[0] + HANDLE_DEPTH / 2
         y = handle[1] - HANDLE_HALF_THICKNESS - FINGER_HALF_WIDTH - self.side_gap
         return np.array([face_x - self.front_gap - self.reach - back, y, handle[2]])
@@ -141,7 +141,7 @@ class CabinetSlideExpert(CabinetExpert):
                 self.phase = SlidePhase.PUSH
                 self._push_start = target
             return self.waypoint_at(target, slow=True)
-        opened = float(self.sim.joint_position(SLIDE)[0])
+        opened = float(self.scene.joint_position(SLIDE)[0])
         travel = min(self.push_distance, opened + self.max_lead) + self.side_gap
         return self.waypoint_at(self._push_start + np.array([0.0, travel, 0.0]))
 
@@ -167,12 +167,12 @@ class CabinetHingeExpert(CabinetExpert):
     max_lead = np.deg2rad(12.0)  # how far the reference may run ahead of the lid
 
     def _hinge(self) -> np.ndarray:
-        return self.sim.body_pose(LID)[0].copy()
+        return self.scene.body_pose(LID)[0].copy()
 
     def _entry_point(self, depth: float) -> np.ndarray:
         """Corner ``depth`` behind the front face, centred in the notch, just under the lid."""
         hinge = self._hinge()
-        face_x = self.sim.body_pose(CABINET)[0][0] - HALF_DEPTH
+        face_x = self.scene.body_pose(CABINET)[0][0] - HALF_DEPTH
         return np.array([face_x + depth, hinge[1], hinge[2] - self.below_lid])
 
     def _arc_point(self, theta: float) -> np.ndarray:
@@ -194,7 +194,7 @@ class CabinetHingeExpert(CabinetExpert):
                 self._radius = self._hinge()[0] - target[0]
                 self._theta_ref = 0.0
             return self.waypoint_at(target, slow=True)
-        angle = float(self.sim.joint_position(HINGE)[0])
+        angle = float(self.scene.joint_position(HINGE)[0])
         theta = self._theta_ref + self.lift_rate * self.dt
         self._theta_ref = min(theta, angle + self.max_lead, self.goal_angle)
         return self.waypoint_at(self._arc_point(self._theta_ref))

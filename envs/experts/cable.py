@@ -104,7 +104,7 @@ class CableExpert(GripperExpert):
         self._route: list[Leg] = []
         self._leg = 0
         _, eef_rot = self.eef_world()
-        box_rot = self.sim.body_pose(CABLE_END)[1]
+        box_rot = self.scene.body_pose(CABLE_END)[1]
         self._box_yaw0 = _yaw(box_rot)
         self._yaw = self._box_yaw0
         self._grasp_rot = self._top_down(box_rot[:, 1], eef_rot)
@@ -116,7 +116,7 @@ class CableExpert(GripperExpert):
         Panda's ``pinch``, the xArm's ``link_tcp``): 0 for the UR5e, pi/2 for the xArm7, pi/4
         for the Panda (its hand is turned -45 deg on the flange). Rounded to a microradian, so a
         gripper mounted square reads exactly 0."""
-        _, eef_rot = self.sim.site_pose(self.arm.eef_frame)
+        _, eef_rot = self.scene.site_pose(self.arm.eef_frame)
         _, tcp_rot = self.tcp_world()
         closing = eef_rot.T @ tcp_rot[:, 1]
         return round(float(np.arctan2(closing[1], closing[0])), 6)
@@ -138,8 +138,8 @@ class CableExpert(GripperExpert):
 
     def plan_route(self) -> list[Leg]:
         """The legs of steps 2-5 for the current box and pole positions."""
-        pole1, pole2 = self.sim.geom_pose(POLE1)[0], self.sim.geom_pose(POLE2)[0]
-        box = self.sim.body_pose(CABLE_END)[0]
+        pole1, pole2 = self.scene.geom_pose(POLE1)[0], self.scene.geom_pose(POLE2)[0]
+        box = self.scene.body_pose(CABLE_END)[0]
         low = self.table_z() + END_BOX_HALF_SIZE[2] + self.drag_lift
         high = low + self.hang
         gap_x, pole_y = 0.5 * (pole1[0] + pole2[0]), pole1[1]
@@ -167,7 +167,7 @@ class CableExpert(GripperExpert):
     def _within_reach(self, turn: list[Leg], box: np.ndarray) -> list[Leg]:
         """The turn's points moved up (+y, towards the connector's side) where they lie more
         than :attr:`max_reach` cable lengths from the connector, each heading along its leg."""
-        anchor = self.sim.body_pose(CABLE_ANCHOR)[0]
+        anchor = self.scene.body_pose(CABLE_ANCHOR)[0]
         reach = self.max_reach * CABLE_LENGTH
         legs, last = [], box[:2]
         for leg in turn:
@@ -184,13 +184,13 @@ class CableExpert(GripperExpert):
     def waypoint(self) -> Waypoint:
         dz = np.array([0.0, 0.0, self.grasp_dz])
         if self.phase is Phase.ABOVE:
-            target = self.sim.body_pose(CABLE_END)[0] + dz
+            target = self.scene.body_pose(CABLE_END)[0] + dz
             target[2] += self.approach_height
             if self.reached(target, 0.01):
                 self.phase = Phase.DESCEND
             return Waypoint(target, self._grasp_rot, self.open_gripper)
         if self.phase is Phase.DESCEND:
-            target = self.sim.body_pose(CABLE_END)[0] + dz
+            target = self.scene.body_pose(CABLE_END)[0] + dz
             if self.reached(target, 0.003):
                 self.phase = Phase.CLOSE
                 self._hold = target

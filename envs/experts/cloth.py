@@ -72,11 +72,11 @@ class ClothExpert(GripperExpert):
         super().on_reset()
         self.phase = Phase.BEHIND
         _, eef_rot = self.eef_world()
-        board, rot = self.sim.body_pose(BOARD)
+        board, rot = self.scene.body_pose(BOARD)
         self._board = board.copy()
         self._across = rot[:, 0].copy()  # board x: from the robot's side to the far side
         self._along = rot[:, 1].copy()  # board y: along the hem
-        robot = self.sim.body_pose(self.arm.root_frame)[0]
+        robot = self.scene.body_pose(self.arm.root_frame)[0]
         if self._across @ (robot - self._board) > 0:  # make it point away from the robot
             self._across, self._along = -self._across, -self._along
         # Of the two finger orientations closing across the sheet, the one nearer the hand's.
@@ -91,7 +91,7 @@ class ClothExpert(GripperExpert):
         self._hold = self._hem + np.array([0.0, 0.0, self.grasp_depth])
 
     def _hem_middle(self) -> np.ndarray:
-        points = self.env.task.cloth_points(self.sim)
+        points = self.env.task.cloth_points(self.scene)
         bottom = points[(CLOTH_ROWS - 1) * CLOTH_COLUMNS :]
         return bottom.mean(axis=0)
 

@@ -62,11 +62,11 @@ class DoorExpert(ScriptedExpert):
         return self.tcp_world()[0]
 
     def _door_angle(self) -> float:
-        return float(self.sim.joint_position(DOOR)[0])
+        return float(self.scene.joint_position(DOOR)[0])
 
     def _leaf_point(self, theta: float, x: float) -> np.ndarray:
         """World position of leaf-frame point ``(x, grasp_y, 0)`` with the leaf at ``theta``."""
-        leaf_pos, leaf_rot = self.sim.body_pose(DOOR_LEAF)
+        leaf_pos, leaf_rot = self.scene.body_pose(DOOR_LEAF)
         closed = Rotation.from_matrix(leaf_rot) * Rotation.from_euler("z", -self._door_angle())
         local = Rotation.from_euler("z", theta).apply([x, self.grasp_y, 0.0])
         return leaf_pos + closed.apply(local)

@@ -106,7 +106,7 @@ class LeftCableArm(ArmTargets, CableExpert):
     def on_reset(self) -> None:
         super().on_reset()
         self.waiting = True
-        pole1, pole2 = self.sim.geom_pose(POLE1)[0], self.sim.geom_pose(POLE2)[0]
+        pole1, pole2 = self.scene.geom_pose(POLE1)[0], self.scene.geom_pose(POLE2)[0]
         gap_x = 0.5 * (pole1[0] + pole2[0])
         self._wait = Waypoint(
             np.array([gap_x, pole1[1] + self.wait_dy, self.table_z() + self.wait_height]),

@@ -32,13 +32,13 @@ class InsertExpert(ScriptedExpert):
         return self._offset
 
     def measured_tool(self) -> np.ndarray:
-        peg, rot = self.sim.body_pose(PEG)
+        peg, rot = self.scene.body_pose(PEG)
         axis = rot[:, 2]
         ends = (peg + PEG_HALF_LENGTH * axis, peg - PEG_HALF_LENGTH * axis)
         return min(ends, key=lambda end: end[2]).copy()
 
     def waypoint(self) -> Waypoint:
-        hole = self.sim.body_pose(HOLE)[0]
+        hole = self.scene.body_pose(HOLE)[0]
         gripper = self.env.home_command[self.gripper_index]
         above = np.array([hole[0], hole[1], hole[2] + HOLE_DEPTH + self.clearance])
         if self.phase is Phase.ABOVE:

@@ -87,12 +87,12 @@ class ParticleExpert(GripperExpert):
 
     def measured_tool(self) -> np.ndarray:
         if self._on_scoop:
-            return self.sim.body_pose(SCOOP)[0].copy()
+            return self.scene.body_pose(SCOOP)[0].copy()
         return self.pinch_point()
 
     # ------------------------------------------------------------------ helpers
     def _grasp_point(self) -> np.ndarray:
-        return self.sim.geom_pose(SCOOP_HANDLE)[0] + np.array([0, 0, self.grasp_above_centre])
+        return self.scene.geom_pose(SCOOP_HANDLE)[0] + np.array([0, 0, self.grasp_above_centre])
 
     def _take_scoop(self) -> None:
         """Switch the tool point to the scoop's plate centre. The reference jumps to the
@@ -105,8 +105,8 @@ class ParticleExpert(GripperExpert):
 
     def plan_route(self) -> list[Leg]:
         """The legs after the grasp, for the current container positions."""
-        source, goal = self.sim.body_pose(SOURCE)[0], self.sim.body_pose(GOAL)[0]
-        scoop = self.sim.body_pose(SCOOP)[0]
+        source, goal = self.scene.body_pose(SOURCE)[0], self.scene.body_pose(GOAL)[0]
+        scoop = self.scene.body_pose(SCOOP)[0]
         inner = SOURCE_HALF_SIDE - CASE_WALL_HALF_THICKNESS
         carry = self.table_z() + self.carry_height
         skim = self.table_z() + SCOOP_PLATE_HALF[2] + self.skim_height

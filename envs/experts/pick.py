@@ -51,7 +51,7 @@ class PickExpert(GripperExpert):
         self._obj = task.target_object
         self._basket = task.target_basket
         index = task.objects.index(self._obj)
-        positions = np.array([self.sim.body_pose(o.body)[0][:2] for o in task.objects])
+        positions = np.array([self.scene.body_pose(o.body)[0][:2] for o in task.objects])
         yaw = best_grasp_yaw(index, positions, task.objects)
         yaw = grasp_yaws(self._obj)[0] if yaw is None else yaw
         _, eef_rot = self.eef_world()
@@ -67,7 +67,7 @@ class PickExpert(GripperExpert):
         object near the straight path to the basket (the gripper is above the object)."""
         task: PickTask = self.env.task
         start = positions[index]
-        goal = self.sim.body_pose(self._basket.body)[0][:2]
+        goal = self.scene.body_pose(self._basket.body)[0][:2]
         reach = max(*self._obj.footprint, FINGER_REACH)
         heights = [b.height for b in task.baskets]
         for i, other in enumerate(task.objects):
@@ -82,23 +82,23 @@ class PickExpert(GripperExpert):
     def _drop_xy(self) -> np.ndarray:
         """Where the object's base centre goes: in the basket, as near the robot as its walls
         allow (the far basket is at the edge of the arm's reach)."""
-        basket = self.sim.body_pose(self._basket.body)[0][:2]
-        axes = self.sim.body_pose(self._obj.body)[1][:2, :2]
+        basket = self.scene.body_pose(self._basket.body)[0][:2]
+        axes = self.scene.body_pose(self._obj.body)[1][:2, :2]
         half_x = np.abs(axes[0]) @ np.asarray(self._obj.footprint)  # extent along world x
         slack = max(0.0, self._basket.inner[0] - half_x - self.wall_margin)
         return basket - np.array([slack, 0.0])
 
     def _grasp_point(self) -> np.ndarray:
-        pos, rot = self.sim.body_pose(self._obj.body)
+        pos, rot = self.scene.body_pose(self._obj.body)
         return pos + rot @ np.asarray(self._obj.grasp)
 
     def _over_basket(self, base_z: float) -> np.ndarray:
         """Pinch target that puts the object's base centre over the drop point at ``base_z``."""
-        held = self.measured_tool() - self.sim.body_pose(self._obj.body)[0]
+        held = self.measured_tool() - self.scene.body_pose(self._obj.body)[0]
         return np.array([*(self._drop + held[:2]), base_z + held[2]])
 
     def _object_over_drop(self, tol: float) -> bool:
-        rel = self.sim.body_pose(self._obj.body)[0][:2] - self._drop
+        rel = self.scene.body_pose(self._obj.body)[0][:2] - self._drop
         return bool(np.max(np.abs(rel)) < tol)
 
     # ------------------------------------------------------------------ phases
@@ -133,7 +133,7 @@ class PickExpert(GripperExpert):
             still = self._tool_speed < self.still_speed
             if self.reached(target, 0.01, xy_only=True) and still and self._object_over_drop(0.01):
                 self.phase = Phase.LOWER
-                floor = self.sim.body_pose(self._basket.body)[0][2] + self._basket.floor
+                floor = self.scene.body_pose(self._basket.body)[0][2] + self._basket.floor
                 self._place = self._over_basket(floor + self.drop_height)
             return Waypoint(target, self._rot, self.closed_gripper)
         if self.phase is Phase.LOWER:

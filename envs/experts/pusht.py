@@ -326,7 +326,7 @@ class PushTExpert(GripperExpert):
         self._queue: list[Move] = []
         self._steps_on_target = 0
         self._closing = True
-        self._base = self.sim.body_pose(self.arm.root_frame)[0][:2]
+        self._base = self.scene.body_pose(self.arm.root_frame)[0][:2]
         self._table = np.array(self.env.task.workspace.table.top_centre[:2])
         self._stage_offset = np.array(self.stage_offset)
         self.staging = True
@@ -337,11 +337,11 @@ class PushTExpert(GripperExpert):
 
     # ------------------------------------------------------------------ world
     def block_pose(self) -> tuple[np.ndarray, float]:
-        pos, rot = self.sim.body_pose(TBLOCK)
+        pos, rot = self.scene.body_pose(TBLOCK)
         return pos[:2], yaw_of(rot)
 
     def goal_pose(self) -> tuple[np.ndarray, float]:
-        pos, rot = self.sim.body_pose(GOAL)
+        pos, rot = self.scene.body_pose(GOAL)
         return pos[:2], yaw_of(rot)
 
     def target_pose(self) -> tuple[np.ndarray, float]:

@@ -107,7 +107,7 @@ class RingExpert(GripperExpert):
         # robot's base to the pole): the hand is high only on the near side of the pole, where
         # the arm reaches easily. Hanging from the hand, the ring faces the fingers' closing
         # axis, so the hand points down with its fingers closing along that line.
-        base = self.sim.body_pose(self.arm.root_frame)[0]
+        base = self.scene.body_pose(self.arm.root_frame)[0]
         outward = self._pole() - base
         outward[2] = 0.0
         self._outward = outward / np.linalg.norm(outward)
@@ -118,7 +118,7 @@ class RingExpert(GripperExpert):
 
     # ------------------------------------------------------------------ helpers
     def _ring(self) -> np.ndarray:
-        return self.env.task.ring_points(self.sim)
+        return self.env.task.ring_points(self.scene)
 
     def _grasp_point(self) -> np.ndarray:
         """Middle of the ring's lowest segment (the two lowest vertices)."""
@@ -127,7 +127,7 @@ class RingExpert(GripperExpert):
         return lowest.mean(axis=0) + np.array([self.grasp_depth, 0.0, 0.0])
 
     def _pole(self) -> np.ndarray:
-        return self.sim.body_pose(POLE)[0].copy()
+        return self.scene.body_pose(POLE)[0].copy()
 
     def _hanging_target(self, touch: np.ndarray, lowest_z: float) -> np.ndarray:
         """Pinch target that puts the hanging ring's lowest point at ``touch`` (xy) and height

@@ -53,24 +53,24 @@ class ToolboxExpert(GripperExpert):
 
     def _grasp_rotation(self, current: Rotation) -> Rotation:
         """Fingers across the handle bar (perpendicular to its axis in the horizontal plane)."""
-        bar_axis = self.sim.geom_pose(HANDLE)[1][:, 1]
+        bar_axis = self.scene.geom_pose(HANDLE)[1][:, 1]
         return top_down_rotation(np.cross([0.0, 0.0, 1.0], bar_axis), current)
 
     # ------------------------------------------------------------------ helpers
     def _over_mat(self, bottom_above_mat_top: float) -> np.ndarray:
         """Pinch target that puts the toolbox origin over the mat centre at the given height."""
-        held = self.measured_tool() - self.sim.body_pose(TOOLBOX)[0]
-        mat = self.sim.body_pose(MAT)[0]
+        held = self.measured_tool() - self.scene.body_pose(TOOLBOX)[0]
+        mat = self.scene.body_pose(MAT)[0]
         return mat + held + np.array([0.0, 0.0, MAT_TOP + bottom_above_mat_top])
 
     def _box_over_mat(self, tol: float) -> bool:
-        box, mat = self.sim.body_pose(TOOLBOX)[0], self.sim.body_pose(MAT)[0]
+        box, mat = self.scene.body_pose(TOOLBOX)[0], self.scene.body_pose(MAT)[0]
         return bool(np.max(np.abs(box[:2] - mat[:2])) < tol)
 
     # ------------------------------------------------------------------ phases
     def waypoint(self) -> Waypoint:
         self._track_tool_speed()
-        grasp = self.sim.geom_pose(HANDLE)[0] - np.array([0.0, 0.0, self.grasp_depth])
+        grasp = self.scene.geom_pose(HANDLE)[0] - np.array([0.0, 0.0, self.grasp_depth])
         if self.phase is Phase.ABOVE:
             target = grasp + np.array([0.0, 0.0, self.approach_height])
             if self.reached(target, 0.01):
@@ -97,7 +97,7 @@ class ToolboxExpert(GripperExpert):
                 self._place = self._over_mat(self.place_height)
             return Waypoint(target, self._rot, self.closed_gripper)
         if self.phase is Phase.LOWER:
-            if self.env.task.is_success(self.sim):
+            if self.env.task.is_success(self.scene):
                 self.phase = Phase.RELEASE
                 self._count = 0
                 self._release = self._ref_pos.copy()

@@ -1,8 +1,8 @@
 """The MuJoCo backend: RMB's MuJoCo worlds behind the simulator-neutral env core.
 
 Builds the scene from records (the robot's MuJoCo model, :mod:`rmb_lerobot.envs.mujoco.robots`;
-the workspace, :mod:`rmb_lerobot.envs.mujoco.scene`; the task's props, its MuJoCo hooks in
-:class:`~rmb_lerobot.envs.tasks.base.Task`), and steps it as RMB does: timestep 0.004 s,
+the workspace, :mod:`rmb_lerobot.envs.mujoco.scene`; the task's props, its MuJoCo scene in
+:mod:`rmb_lerobot.envs.mujoco.tasks`), and steps it as RMB does: timestep 0.004 s,
 ``frame_skip`` 8 (31.25 Hz), position-controlled joints. Forward/inverse kinematics are
 :class:`~rmb_lerobot.envs.mujoco.kinematics.ArmKinematics` on the model, one per arm.
 
@@ -13,17 +13,19 @@ MuJoCo-specific on purpose, for the tasks' MuJoCo hooks and tests: :attr:`model`
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
-from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
+from rmb_lerobot.envs.mujoco.options import MujocoOptions
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer, mujoco
 from rmb_lerobot.envs.mujoco.robots import build_robot_model
 from rmb_lerobot.envs.mujoco.scene import build_scene
+from rmb_lerobot.envs.mujoco.tasks.base import mujoco_scene_for
 from rmb_lerobot.envs.robots import Robot
+from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.envs.sensors.tactile import TactileGrid, add_pad_sites, pads_for
 from rmb_lerobot.envs.workspace import Workspace
 from rmb_lerobot.pointcloud import opencv_camera_pose
@@ -31,63 +33,49 @@ from rmb_lerobot.pointcloud import opencv_camera_pose
 if TYPE_CHECKING:
     from rmb_lerobot.envs.tasks.base import Task
 
-FRAME_SKIP = 8
-
-
-class MujocoBackend(Backend):
+class MujocoBackend(Backend, SceneState):
     """One MuJoCo world: the robot record's model, the workspace and the task's props.
 
-    Parameters
-    ----------
-    image_size:
-        ``(width, height)`` of rendered images (sizes the offscreen buffer).
-    frame_skip:
-        Physics steps per control step.
-    shadows, reflections:
-        MuJoCo's shadow and reflection passes (off: they cost several times a plain render in
-        software rendering).
-    antialias:
-        4x multisampling, as RMB renders (default); ``False`` is about 2x faster at 640x480 in
-        software rendering, with aliased edges.
-    visual_mesh_error:
-        How far (m) the robot's simplified visual meshes may leave the original surface
-        (default 0.5 mm); 0 for the original meshes. Physics is the same at every setting.
-    tactile:
-        Add RMB's fingertip tactile sites and read their grids
-        (:mod:`rmb_lerobot.envs.sensors.tactile`; :meth:`tactile`). Off: the model is unchanged.
+    Its own scene view (:attr:`scene` is itself): bodies, geoms, sites, joints and flexes by the
+    names the task's MuJoCo scene gave them.
+
+    Args:
+        task: The neutral task; its MuJoCo scene builder comes from
+            :data:`~rmb_lerobot.envs.mujoco.tasks.base.MUJOCO_TASK_SCENES`.
+        robot: The robot record (its MuJoCo model comes from
+            :data:`~rmb_lerobot.envs.mujoco.robots.MUJOCO_BUILDERS`).
+        workspace: The table and fixed cameras of the scene.
+        options: How to build, step and render (:class:`MujocoOptions`).
     """
+
+    simulator: ClassVar[str] = "mujoco"
 
     def __init__(
         self,
         task: Task,
         robot: Robot,
         workspace: Workspace,
-        *,
-        image_size: tuple[int, int],
-        frame_skip: int = FRAME_SKIP,
-        shadows: bool = False,
-        reflections: bool = False,
-        antialias: bool = True,
-        visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
-        tactile: bool = False,
+        options: MujocoOptions | None = None,
     ):
-        if frame_skip < 1:
-            raise ValueError(f"frame_skip must be >= 1, got {frame_skip!r}")
+        options = MujocoOptions() if options is None else options
+        self.options = options
+        image_size = options.image_size
         self.task = task
         self.robot = robot
         self.workspace = workspace
-        self.frame_skip = int(frame_skip)
+        self.frame_skip = int(options.frame_skip)
         self.image_size = image_size
         self._render_flags = {
-            "shadows": bool(shadows),
-            "reflections": bool(reflections),
-            "antialias": bool(antialias),
+            "shadows": options.shadows,
+            "reflections": options.reflections,
+            "antialias": options.antialias,
         }
-        self.robot_model = build_robot_model(robot, visual_mesh_error=visual_mesh_error)
+        self.robot_model = build_robot_model(robot, visual_mesh_error=options.visual_mesh_error)
         spec = build_scene(self.robot_model, workspace, max_render_size=image_size)
-        pads = pads_for(robot.name) if tactile else ()
+        pads = pads_for(robot.name) if options.tactile else ()
         add_pad_sites(spec, pads)
-        task.build(spec, self)
+        self.task_scene = mujoco_scene_for(task)
+        self.task_scene.build(spec, self)
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         self._tactile = {pad.key: TactileGrid(self.model, pad.site) for pad in pads}
@@ -119,7 +107,7 @@ class MujocoBackend(Backend):
     # ---------------------------------------------------------------- episode
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
         mujoco.mj_resetData(self.model, self.data)
-        self.task.apply_world(self, world_offset)
+        self.task_scene.apply_world(self, world_offset)
         for qpos, grip_qpos, scale, (arm, g) in zip(
             self._arm_qpos, self._grip_qpos, self._grip_scale, self._slices, strict=True
         ):
@@ -130,7 +118,7 @@ class MujocoBackend(Backend):
             self.data.qpos[grip_qpos] = home[g] / scale
         self.apply_command(home)
         mujoco.mj_kinematics(self.model, self.data)
-        self.task.reset_objects(self)
+        self.task_scene.reset_objects(self)
         mujoco.mj_forward(self.model, self.data)
 
     def apply_command(self, command: np.ndarray) -> None:
@@ -230,6 +218,10 @@ class MujocoBackend(Backend):
         return self.kinematics[arm].world_to_root(pos, rot)
 
     # ---------------------------------------------------------------- scene state
+    @property
+    def scene(self) -> SceneState:
+        return self
+
     @staticmethod
     def _pose(view) -> tuple[np.ndarray, np.ndarray]:
         return view.xpos.copy(), view.xmat.reshape(3, 3).copy()

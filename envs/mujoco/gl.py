@@ -1,26 +1,22 @@
-"""Pick MuJoCo's OpenGL backend before ``mujoco`` is imported.
+"""Pick MuJoCo's OpenGL backend for a renderer, headless where the machine allows.
 
-MuJoCo reads ``MUJOCO_GL`` once, when the ``mujoco`` package is first imported, so this module
-must run before that (``rmb_lerobot.envs`` imports it first thing). A value the user set is
-always kept. Otherwise EGL is chosen when its library loads (headless, works with Mesa's
-software renderer), else OSMesa, else MuJoCo's default (GLFW, which needs a display).
+MuJoCo reads ``MUJOCO_GL`` once, when ``mujoco`` is first imported, to pick its
+``mujoco.GLContext``. Rather than setting that variable for the whole process at package import
+(which must then precede every ``import mujoco``, and changes what other libraries see), the
+renderer asks :func:`gl_context_class` when it is made: a value the user set is always kept;
+otherwise EGL's or OSMesa's context class is taken directly from its MuJoCo module.
 """
 
 from __future__ import annotations
 
 import ctypes
 import ctypes.util
-import logging
+import importlib
 import os
-import sys
-from collections.abc import Callable, MutableMapping
-
-logger = logging.getLogger(__name__)
+from collections.abc import Callable, Mapping
 
 # MUJOCO_GL value -> the shared library that backend loads.
 _BACKEND_LIBRARIES = {"egl": "EGL", "osmesa": "OSMesa"}
-# PyOpenGL must agree with MuJoCo on the platform.
-_PYOPENGL_PLATFORM = {"egl": "egl", "osmesa": "osmesa"}
 
 
 def library_loads(name: str) -> bool:
@@ -36,7 +32,7 @@ def library_loads(name: str) -> bool:
 
 
 def choose_backend(
-    environ: MutableMapping[str, str], loads: Callable[[str], bool] = library_loads
+    environ: Mapping[str, str], loads: Callable[[str], bool] = library_loads
 ) -> str | None:
     """The ``MUJOCO_GL`` value to use: the user's, else the first backend whose library loads
     (EGL, then OSMesa), else ``None`` (leave MuJoCo's default)."""
@@ -49,28 +45,30 @@ def choose_backend(
     return None
 
 
-def configure_gl_backend(
-    environ: MutableMapping[str, str] | None = None,
-    loads: Callable[[str], bool] = library_loads,
-) -> str | None:
-    """Set ``MUJOCO_GL`` (and ``PYOPENGL_PLATFORM``) in ``environ`` unless the user set it.
+def gl_context_class(
+    environ: Mapping[str, str] | None = None, loads: Callable[[str], bool] = library_loads
+) -> tuple[str | None, type]:
+    """The OpenGL backend for a new renderer and MuJoCo's context class for it.
 
-    Returns the backend in effect. Warns when ``mujoco`` was already imported without a backend
-    choice: MuJoCo has then fixed its default and offscreen rendering may need a display.
+    Called where a renderer is made, not at import: choosing needs no environment variable set
+    for the whole process, and works whenever ``mujoco`` was imported. A ``MUJOCO_GL`` the user
+    set is MuJoCo's own choice (``mujoco.GLContext``, fixed when ``mujoco`` was imported);
+    otherwise EGL when its library loads (headless, works with Mesa's software renderer), else
+    OSMesa, each through its own MuJoCo module (which sets PyOpenGL's platform to match), else
+    MuJoCo's default (GLFW, which needs a display).
+
+    Args:
+        environ: The environment to read (default ``os.environ``); it is not changed here.
+        loads: Whether a shared library loads (for tests).
+
+    Returns:
+        ``(backend, GLContext class)``; ``backend`` is None for MuJoCo's default.
     """
     environ = os.environ if environ is None else environ
-    if environ.get("MUJOCO_GL"):
-        return environ["MUJOCO_GL"]
-    if "mujoco" in sys.modules and environ is os.environ:
-        logger.warning(
-            "mujoco was imported before rmb_lerobot.envs; set MUJOCO_GL=egl (or osmesa) in the "
-            "environment for headless rendering"
-        )
-        return None
     backend = choose_backend(environ, loads)
-    if backend is None:
-        return None
-    environ["MUJOCO_GL"] = backend
-    if backend in _PYOPENGL_PLATFORM:
-        environ.setdefault("PYOPENGL_PLATFORM", _PYOPENGL_PLATFORM[backend])
-    return backend
+    if environ.get("MUJOCO_GL") or backend not in _BACKEND_LIBRARIES:
+        import mujoco
+
+        return backend, mujoco.GLContext
+    module = importlib.import_module(f"mujoco.{backend}")
+    return backend, module.GLContext

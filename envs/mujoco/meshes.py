@@ -46,10 +46,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from rmb_lerobot.envs.mujoco.options import DEFAULT_VISUAL_MESH_ERROR
+
 logger = logging.getLogger(__name__)
 
-DEFAULT_VISUAL_MESH_ERROR = 5e-4
-"""Default bound (metres) on how far simplified visual meshes may leave the original surface."""
 WELD_TOLERANCE = 1e-6
 """Vertices in the same grid cell of this size (metres) are merged before simplifying."""
 VISUAL_SUFFIX = "_visual"

@@ -16,13 +16,10 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Sequence
 
+import mujoco
 import numpy as np
 
-from rmb_lerobot.envs.mujoco.gl import configure_gl_backend
-
-configure_gl_backend()
-
-import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imported)
+from rmb_lerobot.envs.mujoco.gl import gl_context_class
 
 
 class MultiCameraRenderer:
@@ -53,7 +50,8 @@ class MultiCameraRenderer:
             )
         self.model = model
         self.width, self.height = int(width), int(height)
-        self._gl = mujoco.GLContext(offwidth, offheight)
+        _, context_class = gl_context_class()
+        self._gl = context_class(offwidth, offheight)
         self._gl.make_current()
         samples = model.vis.quality.offsamples
         if not antialias:

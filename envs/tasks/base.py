@@ -1,22 +1,19 @@
-"""The task interface: what a task adds to the scene, how its world varies, what success is.
+"""The task interface: how a task's world varies, what success is, where it starts.
 
-A task knows nothing about rendering, actions or gymnasium; :class:`rmb_lerobot.envs.base.RmbEnv`
-composes it with a robot and a backend (dm_control's composer split). It is placed in the
-workspace it is given (:mod:`rmb_lerobot.envs.workspace`: the table's height and centre), not
-at module constants, so one task serves every robot whose scene has that table.
+A task knows nothing about simulators, rendering, actions or gymnasium:
+:class:`rmb_lerobot.envs.base.RmbEnv` composes it with a robot and a backend (dm_control's
+composer split). It is placed in the workspace it is given (:mod:`rmb_lerobot.envs.workspace`:
+the table's height and centre), not at module constants, so one task serves every robot whose
+scene has that table.
 
-Neutral and per-simulator parts:
-
-- simulator-neutral: the names and description, the worlds (:attr:`Task.world_offsets`,
-  :meth:`Task.world_offset`), episode variants, start poses per robot, and the success test
-  :meth:`Task.is_success`, which reads the world through
-  :class:`~rmb_lerobot.envs.backend.SceneState` (body/geom/site poses, joint positions,
-  deformables' points), whatever the backend;
-- MuJoCo-specific: :meth:`Task.build`, :meth:`Task.apply_world` and :meth:`Task.reset_objects`,
-  which the MuJoCo backend (:class:`~rmb_lerobot.envs.mujoco.backend.MujocoBackend`) calls with
-  itself (``.robot``, ``.robot_model``, ``.workspace``, and ``.model``/``.data`` once
-  compiled). Implementing them is what makes a task a MuJoCo task; another simulator's backend
-  calls its own builder hooks.
+What a task owns: its names and description, its worlds (:attr:`Task.world_offsets`,
+:meth:`Task.world_offset`; as many as RMB gives that task), episode variants, start poses per
+robot, and the success test :meth:`Task.is_success`, which reads the world through a
+:class:`~rmb_lerobot.envs.scene.SceneState` (body/frame poses, joint positions, deformables'
+points), whatever the backend. How a simulator builds the task's props lives beside that
+simulator's backend (``rmb_lerobot.envs.mujoco.tasks.<task>``,
+``rmb_lerobot.envs.pybullet.tasks.<task>``), found through the simulator's table of scene
+builders; this module imports no simulator.
 """
 
 from __future__ import annotations
@@ -30,12 +27,8 @@ import numpy as np
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
-    import mujoco
+    from rmb_lerobot.envs.scene import SceneState
 
-    from rmb_lerobot.envs.backend import SceneState
-    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
-
-NUM_WORLDS = 6
 StartPoses = Mapping[str, tuple[tuple[float, ...], ...]]
 """Robot short name -> per-arm start joint angles."""
 
@@ -55,18 +48,19 @@ def placement_in[Placement](
 
 
 class Task(ABC):
-    """One RMB task. Subclasses set the class attributes and implement the hooks.
+    """One RMB task. Subclasses set the class attributes and implement :meth:`is_success`.
 
-    ``world_offsets`` is RMB's table of six object shifts (``world_idx`` 0..5, metres, world
-    frame); a random shift, uniform in ``[-scale, scale]`` on the axes where ``shift_axes`` is
-    1, is added on top when the env asks for one. ``start_poses``: per robot short name, the
-    arm joint angles (one tuple per arm) the task starts from (RMB's per-env start poses);
-    robots not listed start at their own home pose.
+    ``world_offsets`` is RMB's table of the task's object shifts (one row per ``world_idx``,
+    metres, world frame: six for RMB's MuJoCo tasks); a random shift, uniform in
+    ``[-scale, scale]`` on the axes where ``shift_axes`` is 1, is added on top when the env asks
+    for one. ``start_poses``: per robot short name, the arm joint angles (one tuple per arm) the
+    task starts from (RMB's per-env start poses); robots not listed start at their own home
+    pose.
     """
 
     name: str  # short task name, e.g. "insert"; the registry derives every env name from it
     description: str  # language instruction for language-conditioned policies
-    world_offsets: np.ndarray  # (NUM_WORLDS, 3)
+    world_offsets: np.ndarray  # (num_worlds, 3)
     shift_axes: np.ndarray = np.array([1.0, 1.0, 0.0])
     max_episode_steps: int = 300
     start_poses: ClassVar[StartPoses] = {}
@@ -74,6 +68,14 @@ class Task(ABC):
 
     def __init__(self, workspace: Workspace = RMB_TABLE) -> None:
         self.workspace = workspace
+        # The episode's world, set by the env core before the backend resets (RMB's success
+        # rules may depend on it: Spoon's goal box; so may a scene's per-world pose).
+        self.world_idx = 0
+
+    @property
+    def num_worlds(self) -> int:
+        """How many worlds (``world_idx`` values) the task has."""
+        return len(self.world_offsets)
 
     def start_pose(self, robot: str) -> tuple[tuple[float, ...], ...] | None:
         """Per-arm start joint angles for robot ``robot``, or None for the robot's home."""
@@ -91,23 +93,6 @@ class Task(ABC):
         instruction of a language-conditioned task); empty for single-variant tasks."""
         return ()
 
-    # ------------------------------------------------------------------ MuJoCo hooks
-    @abstractmethod
-    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
-        """MuJoCo: add the task's bodies, equalities and contact exclusions to the scene spec.
-        ``sim`` is the backend being built: ``sim.robot`` (the record), ``sim.robot_model``
-        (its MuJoCo names) and ``sim.workspace`` are set, the model is not compiled yet."""
-
-    @abstractmethod
-    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
-        """MuJoCo: move the task's objects by ``offset`` (3,) from their nominal placement
-        (in ``sim.model``, right after ``mj_resetData``)."""
-
-    @abstractmethod
-    def reset_objects(self, sim: MujocoBackend) -> None:
-        """MuJoCo: set the objects' state in ``sim.data`` at episode start (the robot is
-        already at home, kinematics computed)."""
-
     # ------------------------------------------------------------------ neutral
     @abstractmethod
     def is_success(self, scene: SceneState) -> bool:
@@ -117,9 +102,9 @@ class Task(ABC):
         self, world_idx: int, rng: np.random.Generator | None = None, random_shift: float = 0.0
     ) -> np.ndarray:
         """Nominal shift of world ``world_idx`` plus an optional uniform random shift."""
-        if not 0 <= int(world_idx) < len(self.world_offsets) or int(world_idx) != world_idx:
+        if not 0 <= int(world_idx) < self.num_worlds or int(world_idx) != world_idx:
             raise ValueError(
-                f"world_idx must be an integer in 0..{len(self.world_offsets) - 1}, "
+                f"world_idx must be an integer in 0..{self.num_worlds - 1}, "
                 f"got {world_idx!r}"
             )
         if random_shift < 0:

@@ -8,13 +8,9 @@ worlds (the random shift moves them in x and y). RMB's other robots' scenes move
 on their tables (:data:`PLACEMENTS`, keyed by workspace name): the Panda's and the dual UR5e's
 keep the UR5e's numbers, the xArm7's shifts it 9.5 cm along +x (connector at (-0.08, 0.2)).
 
-The cable is MuJoCo's discrete elastic rod (a 1D flex with bending/twist elasticity and
-inextensible edges), built directly with :class:`mujoco.MjSpec`: MuJoCo 4 removed the
-``elasticity.cable`` plugin and ``composite`` in favour of this model. Its first vertex is
-pinned to the connector (a ball joint, like RMB's first hinge pair) and its last edge is
-clamped inside the end box (RMB welds the box to the last link). Rod elasticity needs MuJoCo's
-``discrete`` integrator, so this task switches the scene to it (the arms' servos stay stable
-under it thanks to their joints' armature: see the xArm7 model's ``ARMATURE``).
+The cable is an elastic rod of ``num_vertices`` points with inextensible edges: its first point
+is pinned to the connector and its last edge is clamped inside the end box (RMB welds the box
+to the last link). How MuJoCo builds it: :mod:`rmb_lerobot.envs.mujoco.tasks.cable`.
 
 Success is RMB's ``_get_reward``: every cable point is below the pole centre height + 0.01 m,
 the end box is beyond the second pole (x >= pole2 x) and at least 0.05 m on the robot's right
@@ -28,15 +24,13 @@ import itertools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
-import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.tasks.base import StartPoses, Task, placement_in
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
-    from rmb_lerobot.envs.backend import SceneState
-    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
+    from rmb_lerobot.envs.scene import SceneState
 
 CABLE = "cable"  # the flex; vertex bodies are cable_<i>, twist joints cable_twist_<i>
 CABLE_ANCHOR = "cable_anchor"
@@ -51,7 +45,6 @@ END_BOX_MASS = 0.036  # kg (RMB: MuJoCo's default density)
 POLE_RADIUS = 0.01
 POLE_HALF_HEIGHT = 0.03
 POLE_SPACING = 0.05  # pole2 is this far along +x from pole1
-_YELLOW = [1.0, 1.0, 0.2, 1.0]
 
 
 @dataclass(frozen=True)
@@ -134,106 +127,6 @@ class CableTask(Task):
         table = workspace.table
         self.anchor_pos = table.on_top(*placement.connector_xy, CABLE_RADIUS)
         self.poles_nominal_pos = table.on_top(*placement.poles_xy)
-
-    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
-        spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
-        self._build_poles(spec)
-        self._build_cable(spec)
-
-    def _build_poles(self, spec: mujoco.MjSpec) -> None:
-        poles = spec.worldbody.add_body(name=POLES, pos=list(self.poles_nominal_pos))
-        for name, x in ((POLE1, 0.0), (POLE2, POLE_SPACING)):
-            poles.add_geom(
-                name=name,
-                type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-                size=[POLE_RADIUS, POLE_HALF_HEIGHT, 0],
-                pos=[x, 0, POLE_HALF_HEIGHT],
-                rgba=[0.8, 0.0, 0.0, 1.0],
-            )
-
-    def _build_cable(self, spec: mujoco.MjSpec) -> None:
-        """A 1D flex along -y from the anchor: vertex 0 on the static anchor, vertices 1..n-3
-        on bodies with three slide joints, the last two on the free end box (clamped last edge),
-        plus one twist hinge per unclamped edge, named as MuJoCo's rod model binds them."""
-        n = self.num_vertices
-        spacing = CABLE_LENGTH / (n - 1)
-        direction = np.array([0.0, -1.0, 0.0])
-        slide = mujoco.mjtJoint.mjJNT_SLIDE
-        vertex_mass = CABLE_MASS / n
-
-        anchor = spec.worldbody.add_body(name=CABLE_ANCHOR, pos=list(self.anchor_pos))
-        anchor.add_geom(  # RMB's connector box at the fixed end (visual only)
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=list(END_BOX_HALF_SIZE),
-            quat=[np.cos(np.pi / 4), 0, 0, -np.sin(np.pi / 4)],
-            rgba=_YELLOW,
-            contype=0,
-            conaffinity=0,
-        )
-        bodies, verts = [CABLE_ANCHOR], [[0.0, 0.0, 0.0]]
-        inertia = [vertex_mass * 1e-4] * 3  # point masses; MuJoCo needs a rotational inertia
-        for i in range(1, n - 2):
-            body = spec.worldbody.add_body(
-                name=f"{CABLE}_{i}",
-                pos=list(self.anchor_pos + i * spacing * direction),
-                mass=vertex_mass,
-                inertia=inertia,
-            )
-            for axis in np.eye(3):
-                body.add_joint(type=slide, axis=list(axis))
-            bodies.append(body.name)
-            verts.append([0.0, 0.0, 0.0])
-
-        end = spec.worldbody.add_body(
-            name=CABLE_END,
-            pos=list(self.anchor_pos + CABLE_LENGTH * direction),
-            quat=[np.cos(np.pi / 4), 0, 0, -np.sin(np.pi / 4)],  # box x axis along the cable
-        )
-        end.add_freejoint(name=CABLE_END)
-        end.add_geom(
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=list(END_BOX_HALF_SIZE),
-            mass=END_BOX_MASS,
-            rgba=_YELLOW,
-            friction=[1.0, 0.005, 0.0001],
-        )
-        bodies += [CABLE_END, CABLE_END]
-        verts += [[-spacing, 0.0, 0.0], [0.0, 0.0, 0.0]]
-
-        edges = n - 1
-        edge_inertia = 0.5 * (CABLE_MASS / edges) * CABLE_RADIUS**2
-        for e in range(edges - 1):  # the last edge is clamped in the end box: no twist joint
-            name = f"{CABLE}_twist_{e}"
-            twist = spec.worldbody.add_body(name=name, mass=1e-9, inertia=[edge_inertia] * 3)
-            twist.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[1, 0, 0])
-
-        flex = spec.add_flex()
-        flex.name = CABLE
-        flex.dim = 1
-        flex.radius = CABLE_RADIUS
-        flex.vertbody = bodies
-        flex.vert = np.asarray(verts, dtype=np.float64).ravel().tolist()
-        flex.elem = [v for e in range(edges) for v in (e, e + 1)]
-        flex.young = self.young
-        flex.damping = self.elastic_damping
-        flex.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_AUTO  # a cable cannot pass itself
-        flex.friction = [self.friction, 0.005, 0.0001]
-        flex.rgba = [0.9, 0.9, 0.9, 1.0]
-        # Inextensible edges. MuJoCo's default constraint softness (solref 0.02 s) lets these
-        # light vertices stretch ~15 % under a 1 N pull; 2 timesteps keeps it under 2 %.
-        spec.add_equality(
-            type=mujoco.mjtEq.mjEQ_FLEX,
-            name1=CABLE,
-            solref=[2 * spec.option.timestep, 1.0],
-            solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
-        )
-
-    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
-        sim.model.body(POLES).pos = self.poles_nominal_pos + offset
-
-    def reset_objects(self, sim: MujocoBackend) -> None:
-        """Nothing to do: the cable starts straight and at rest in its build pose (``qpos0``),
-        where ``mj_resetData`` already put it along with the rod's reference frames."""
 
     def cable_points(self, scene: SceneState) -> np.ndarray:
         """World positions of the cable's vertices, connector first (n, 3)."""

@@ -34,20 +34,19 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.tasks.base import StartPoses, Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
-    from rmb_lerobot.envs.backend import SceneState
-    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
+    from rmb_lerobot.envs.scene import SceneState
 
-BOX = mujoco.mjtGeom.mjGEOM_BOX
-CYLINDER = mujoco.mjtGeom.mjGEOM_CYLINDER
-CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
-SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
+# The primitive shapes of the objects' geoms (:attr:`Geom.type`).
+BOX = "box"
+CYLINDER = "cylinder"
+CAPSULE = "capsule"
+SPHERE = "sphere"
 
 # The open 2F-85 seen from above around its pinch point: fingers reach 72 mm out along the
 # closing axis and 15 mm across it (measured on the model); plus a few mm of margin.
@@ -60,23 +59,43 @@ MAX_LAYOUT_DRAWS = 200
 RING_LIFT = 0.001  # hollow objects' walls above their base (m)
 
 
-def _yaw_quat(yaw: float) -> np.ndarray:
+def yaw_quat(yaw: float) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation by ``yaw`` about the z axis."""
     return np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])
+
+
+def _mul_quat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Quaternion product ``a b`` (w, x, y, z): MuJoCo's ``mju_mulQuat``, term by term.
+
+    Bit-identical to it where each component has one non-zero term (as for
+    :func:`_lying_quat`'s factors); otherwise the compiled library may fuse multiply-adds.
+    """
+    return np.array(
+        [
+            a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+            a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+            a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+        ]
+    )
 
 
 def _lying_quat(yaw: float) -> np.ndarray:
     """A capsule's axis (its local z) laid horizontally, pointing at ``yaw``."""
-    quat = np.empty(4)
     pitch = np.array([np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0])  # z -> x
-    mujoco.mju_mulQuat(quat, _yaw_quat(yaw), pitch)
-    return quat
+    return _mul_quat(yaw_quat(yaw), pitch)
 
 
 @dataclass(frozen=True)
 class Geom:
-    """One primitive of an object, in the object frame (origin: centre of its base)."""
+    """One primitive of an object, in the object frame (origin: centre of its base).
 
-    type: mujoco.mjtGeom
+    ``type`` is :data:`BOX`, :data:`CYLINDER`, :data:`CAPSULE` or :data:`SPHERE`; ``size`` as
+    MuJoCo gives it: half sizes (box), radius and half length (cylinder, capsule), radius
+    (sphere).
+    """
+
+    type: str
     size: tuple[float, ...]
     pos: tuple[float, float, float]
     rgba: tuple[float, float, float, float]
@@ -148,7 +167,7 @@ def _ring(radius: float, wall: float, height: float, rgba: tuple, n: int = 12) -
             (wall / 2, half_len, half_height),
             (mid * np.cos(a), mid * np.sin(a), RING_LIFT + half_height),
             rgba,
-            quat=tuple(_yaw_quat(a)),
+            quat=tuple(yaw_quat(a)),
         )
         for a in 2 * np.pi * np.arange(n) / n
     ]
@@ -493,62 +512,6 @@ class PickTask(Task):
                     f"{random_shift} m; use a smaller shift"
                 )
         return offset
-
-    # ------------------------------------------------------------------ scene
-    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
-        for obj in self.objects:
-            body = spec.worldbody.add_body(
-                name=obj.body, pos=[*obj.slot, self.table_z], quat=_yaw_quat(obj.yaw).tolist()
-            )
-            body.add_freejoint(name=obj.body)
-            density = obj.mass / sum(g.volume() for g in obj.geoms if g.collide)
-            for g in obj.geoms:
-                geom = body.add_geom(
-                    type=g.type,
-                    size=[*g.size, *[0.0] * (3 - len(g.size))],
-                    pos=list(g.pos),
-                    rgba=list(g.rgba),
-                    condim=4,
-                    quat=list(g.quat),
-                    density=density if g.collide else 0.0,
-                )
-                if not g.collide:
-                    geom.contype = geom.conaffinity = 0
-                    geom.group = 1
-        for basket in self.baskets:
-            self._build_basket(spec, basket)
-
-    def _build_basket(self, spec: mujoco.MjSpec, basket: Basket) -> None:
-        body = spec.worldbody.add_body(name=basket.body, pos=[*basket.pos, self.table_z])
-        (ix, iy), w, h = basket.inner, basket.wall, basket.height
-        rgba = list(basket.rgba)
-        body.add_geom(
-            type=BOX,
-            size=[ix + 2 * w, iy + 2 * w, basket.floor / 2],
-            pos=[0, 0, basket.floor / 2],
-            rgba=rgba,
-        )
-        for sx in (-1, 1):
-            body.add_geom(
-                type=BOX, size=[w, iy + 2 * w, h / 2], pos=[sx * (ix + w), 0, h / 2], rgba=rgba
-            )
-        for sy in (-1, 1):
-            body.add_geom(type=BOX, size=[ix, w, h / 2], pos=[0, sy * (iy + w), h / 2], rgba=rgba)
-
-    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
-        model = sim.model
-        for basket in self.baskets:
-            model.body(basket.body).pos = np.array([*basket.pos, self.table_z]) + offset
-        for obj, xy in zip(self.objects, self.nominal_positions + self.object_shifts, strict=True):
-            model.body(obj.body).pos = [*xy, self.table_z]
-
-    def reset_objects(self, sim: MujocoBackend) -> None:
-        model, data = sim.model, sim.data
-        for obj in self.objects:
-            joint = data.joint(obj.body)
-            joint.qpos[:3] = model.body(obj.body).pos
-            joint.qpos[3:] = _yaw_quat(obj.yaw)
-            joint.qvel[:] = 0.0
 
     # ------------------------------------------------------------------ success
     def object_in_basket(self, scene: SceneState, obj: PickObject, basket: Basket) -> bool:

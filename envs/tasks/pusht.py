@@ -19,15 +19,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
-    from rmb_lerobot.envs.backend import SceneState
-    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
+    from rmb_lerobot.envs.scene import SceneState
 
 TBLOCK = "tblock"  # the block's body (RMB's name)
 TBLOCK_JOINT = "tblock_freejoint"  # its free joint (RMB's name)
@@ -59,10 +57,6 @@ def wrap_angle(angle: float) -> float:
     return float(np.arctan2(np.sin(angle), np.cos(angle)))
 
 
-def _yaw_quat(yaw: float) -> list[float]:
-    return [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
-
-
 class PushTTask(Task):
     name = "pusht"
     description = "Push the T-shaped block into the goal region."
@@ -89,47 +83,6 @@ class PushTTask(Task):
         table = workspace.table
         self.block_nominal_pos = table.on_top(*self.block_xy, BLOCK_HALF_HEIGHT)
         self.goal_pos = table.on_top(*self.goal_xy)
-
-    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
-        material = spec.add_material(name=TBLOCK)
-        material.rgba = list(RED)
-        material.specular = 1.0  # RMB's material: specular 1, shininess 1 (a shiny metal)
-        material.shininess = 1.0
-        block = spec.worldbody.add_body(
-            name=TBLOCK, pos=list(self.block_nominal_pos), quat=_yaw_quat(self.block_yaw)
-        )
-        block.add_freejoint(name=TBLOCK_JOINT)
-        goal = spec.worldbody.add_body(
-            name=GOAL, pos=list(self.goal_pos), quat=_yaw_quat(self.goal_yaw)
-        )
-        for i, (half, y) in enumerate(((BAR_HALF_SIZE, 0.0), (STEM_HALF_SIZE, STEM_OFFSET))):
-            block.add_geom(
-                name=f"{TBLOCK}{i + 1}",
-                type=mujoco.mjtGeom.mjGEOM_BOX,
-                size=list(half),
-                pos=[0.0, y, 0.0],
-                density=DENSITY,
-                friction=list(FRICTION),
-                material=TBLOCK,
-            )
-            goal.add_geom(
-                name=f"{GOAL}{i + 1}",
-                type=mujoco.mjtGeom.mjGEOM_BOX,
-                size=[half[0], half[1], GOAL_HALF_THICKNESS],
-                pos=[0.0, y, 0.0],
-                rgba=list(GOAL_GREY),
-                contype=0,
-                conaffinity=0,
-            )
-
-    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
-        sim.model.body(TBLOCK).pos = self.block_nominal_pos + offset
-
-    def reset_objects(self, sim: MujocoBackend) -> None:
-        joint = sim.data.joint(TBLOCK_JOINT)
-        joint.qpos[:3] = sim.model.body(TBLOCK).pos
-        joint.qpos[3:] = _yaw_quat(self.block_yaw)
-        joint.qvel[:] = 0.0
 
     def pose_error(self, scene: SceneState) -> tuple[float, float]:
         """The block's distance from the goal in xy (m) and its yaw error (rad, wrapped)."""

@@ -18,15 +18,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, ClassVar
 
-import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.tasks.base import StartPoses, Task
 from rmb_lerobot.envs.workspace import RMB_TABLE, Workspace
 
 if TYPE_CHECKING:
-    from rmb_lerobot.envs.backend import SceneState
-    from rmb_lerobot.envs.mujoco.backend import MujocoBackend
+    from rmb_lerobot.envs.scene import SceneState
 
 TOOLBOX = "toolbox"  # the body and its free joint
 MAT = "mat"
@@ -59,47 +57,6 @@ class ToolboxTask(Task):
         super().__init__(workspace)
         self.toolbox_nominal_pos = workspace.table.on_top(0.0, -0.2)
         self.mat_pos = workspace.table.on_top(0.0, 0.2)
-
-    def build(self, spec: mujoco.MjSpec, sim: MujocoBackend) -> None:
-        box = mujoco.mjtGeom.mjGEOM_BOX
-        toolbox = spec.worldbody.add_body(
-            name=TOOLBOX, pos=list(self.toolbox_nominal_pos), quat=list(self.toolbox_quat)
-        )
-        toolbox.add_freejoint(name=TOOLBOX)
-        grey = [0.4, 0.4, 0.5, 1.0]
-        hx, hy, hz = BOX_HALF_SIZE
-        # MuJoCo's default density (1000 kg/m^3), as in RMB: the toolbox weighs 1.18 kg.
-        toolbox.add_geom(type=box, size=[hx, hy, hz], pos=[0, 0, hz], rgba=grey)
-        post_half_height = 0.5 * (HANDLE_HEIGHT - 2 * hz)
-        for y in (-HANDLE_POST_Y, HANDLE_POST_Y):
-            toolbox.add_geom(
-                type=box,
-                size=[HANDLE_HALF_WIDTH, 0.005, post_half_height],
-                pos=[0, y, 2 * hz + post_half_height],
-                rgba=grey,
-            )
-        toolbox.add_geom(
-            name=HANDLE,
-            type=box,
-            size=[HANDLE_HALF_WIDTH, HANDLE_HALF_LENGTH, HANDLE_HALF_WIDTH],
-            pos=[0, 0, HANDLE_HEIGHT],
-            rgba=grey,
-        )
-        mat = spec.worldbody.add_body(name=MAT, pos=list(self.mat_pos))
-        for half, z, rgba in MAT_LAYERS:
-            mat.add_geom(
-                type=box, size=[half, half, MAT_HALF_THICKNESS], pos=[0, 0, z], rgba=list(rgba)
-            )
-
-    def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
-        sim.model.body(TOOLBOX).pos = self.toolbox_nominal_pos + offset
-
-    def reset_objects(self, sim: MujocoBackend) -> None:
-        # A free body's pose lives in its joint, so copy the world's placement there.
-        qpos = sim.data.joint(TOOLBOX).qpos
-        qpos[:3] = sim.model.body(TOOLBOX).pos
-        qpos[3:] = self.toolbox_quat
-        sim.data.joint(TOOLBOX).qvel[:] = 0.0
 
     def is_success(self, scene: SceneState) -> bool:
         toolbox, _ = scene.body_pose(TOOLBOX)

@@ -45,7 +45,6 @@ from pathlib import Path
 from typing import Any
 
 from rmb_lerobot.benchmark.recipes import RECIPES, Recipe, policy_option_args
-from rmb_lerobot.envs.collect import NUM_WORLDS
 from rmb_lerobot.envs.registry import entry_for
 
 CELL_KINDS = ("collect", "convert", "train", "eval")
@@ -110,9 +109,9 @@ class BenchmarkConfig:
     tasks: tuple[str, ...]
     policies: tuple[PolicySpec, ...]
     seeds: tuple[int, ...] = (0,)
-    worlds: tuple[int, ...] = tuple(range(NUM_WORLDS))
+    worlds: tuple[int, ...] = tuple(range(6))  # parse_config: the worlds every task has
     demos: int = 50
-    collect_worlds: tuple[int, ...] = tuple(range(NUM_WORLDS))
+    collect_worlds: tuple[int, ...] = tuple(range(6))
     eval_episodes: int = 5
     eval_seed: int = 1000
     episode_length: int | None = None
@@ -334,13 +333,15 @@ def parse_config(raw: Mapping[str, Any], source: str = "<config>") -> BenchmarkC
     if len(image_size) != 2:
         p.fail("image_size", f"expected [width, height], got {raw.get('image_size')!r}")
     policies = p.policies(raw.get("policies", ["act"]), tasks)
-    worlds = tuple(p.int_list(raw.get("worlds", list(range(NUM_WORLDS))), "worlds"))
+    # Worlds every task of the grid has (RMB: six per MuJoCo task, five or two in PyBullet).
+    num_worlds = min(entry_for(task).num_worlds for task in tasks)
+    worlds = tuple(p.int_list(raw.get("worlds", list(range(num_worlds))), "worlds"))
     collect_worlds = tuple(
-        p.int_list(raw.get("collect_worlds", list(range(NUM_WORLDS))), "collect_worlds")
+        p.int_list(raw.get("collect_worlds", list(range(num_worlds))), "collect_worlds")
     )
     for key, values in (("worlds", worlds), ("collect_worlds", collect_worlds)):
-        if not values or any(not 0 <= w < NUM_WORLDS for w in values):
-            p.fail(key, f"expected worlds in 0..{NUM_WORLDS - 1}, got {list(values)}")
+        if not values or any(not 0 <= w < num_worlds for w in values):
+            p.fail(key, f"expected worlds in 0..{num_worlds - 1}, got {list(values)}")
     seeds = tuple(p.int_list(raw.get("seeds", [0]), "seeds", minimum=0))
     if not seeds or len(set(seeds)) != len(seeds):
         p.fail("seeds", f"expected distinct seeds, got {list(seeds)}")

@@ -40,7 +40,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("--format", choices=["rmb", "hdf5"], default="rmb", dest="fmt")
     parser.add_argument(
-        "--world-idx", type=int, nargs="+", default=list(range(6)), help="worlds to cycle through"
+        "--world-idx",
+        type=int,
+        nargs="+",
+        default=None,
+        help="worlds to cycle through (default: every world of the task)",
     )
     parser.add_argument(
         "--cameras",
@@ -93,14 +97,18 @@ def main(argv: Sequence[str] | None = None) -> int:
                 )
             if args.episodes < 1 or args.workers < 1:
                 raise ValueError("--episodes and --workers must be >= 1")
-            if any(not 0 <= w < 6 for w in args.world_idx):
-                raise ValueError(f"--world-idx values must be in 0..5, got {args.world_idx}")
+            worlds = entry.num_worlds
+            if args.world_idx is not None and any(not 0 <= w < worlds for w in args.world_idx):
+                raise ValueError(
+                    f"--world-idx values must be in 0..{worlds - 1} ({entry.rmb_env_name} has "
+                    f"{worlds} worlds), got {args.world_idx}"
+                )
             config = CollectConfig(
                 env=args.env,
                 out=args.out,
                 episodes=args.episodes,
                 fmt=args.fmt,
-                world_idx=tuple(args.world_idx),
+                world_idx=None if args.world_idx is None else tuple(args.world_idx),
                 cameras=cameras,
                 image_size=(args.image_size[0], args.image_size[1]),
                 depth=not args.no_depth,

@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.insert import InsertTask
 
 
 @pytest.fixture(scope="module")
 def physics_env():
     """Insert env without cameras (physics only)."""
-    env = RmbEnv(InsertTask(), cameras=())
+    env = compose(InsertTask(), cameras=())
     yield env
     env.close()
 
@@ -21,7 +22,7 @@ def physics_env():
 @pytest.fixture(scope="module")
 def camera_env():
     """Insert env with two small cameras and depth."""
-    env = RmbEnv(InsertTask(), cameras=("front", "hand"), image_size=(64, 48), depth=True)
+    env = compose(InsertTask(), cameras=("front", "hand"), image_size=(64, 48), depth=True)
     yield env
     env.close()
 
@@ -33,7 +34,7 @@ def make_env():
     envs = []
 
     def make(task, **kwargs) -> RmbEnv:
-        envs.append(RmbEnv(task, cameras=(), **kwargs))
+        envs.append(compose(task, cameras=(), **kwargs))
         return envs[-1]
 
     yield make

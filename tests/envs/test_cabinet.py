@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.cabinet import (
     CABINET,
     HINGE,
@@ -20,14 +21,14 @@ RMB_Y_OFFSETS = (-0.06, -0.03, 0.0, 0.03, 0.06, 0.09)
 
 @pytest.fixture(scope="module")
 def hinge_env():
-    env = RmbEnv(CabinetHingeTask(), cameras=())
+    env = compose(CabinetHingeTask(), cameras=())
     yield env
     env.close()
 
 
 @pytest.fixture(scope="module")
 def slide_env():
-    env = RmbEnv(CabinetSlideTask(), cameras=())
+    env = compose(CabinetSlideTask(), cameras=())
     yield env
     env.close()
 

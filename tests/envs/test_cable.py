@@ -8,7 +8,7 @@ import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.experts.cable import CableExpert, Phase
-from rmb_lerobot.envs.registry import ENVS
+from rmb_lerobot.envs.registry import ENVS, compose
 from rmb_lerobot.envs.tasks.cable import (
     CABLE,
     CABLE_ANCHOR,
@@ -34,7 +34,7 @@ ANCHOR = CableTask().anchor_pos
 
 @pytest.fixture(scope="module")
 def cable_env():
-    env = RmbEnv(CableTask(), cameras=())
+    env = compose(CableTask(), cameras=())
     yield env
     env.close()
 

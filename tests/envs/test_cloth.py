@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.cloth import (
     BOARD,
     BOARD_HALF_SIZE,
@@ -31,7 +32,7 @@ HINGE_ACROSS, CLOTH_ALONG = (ClothTask().cloth_centre - ClothTask().board_nomina
 
 @pytest.fixture(scope="module")
 def cloth_env():
-    env = RmbEnv(ClothTask(), cameras=())
+    env = compose(ClothTask(), cameras=())
     yield env
     env.close()
 

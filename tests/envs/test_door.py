@@ -4,13 +4,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.door import DOOR, DoorTask
 
 
 @pytest.fixture(scope="module")
 def door_env():
-    env = RmbEnv(DoorTask(), cameras=())
+    env = compose(DoorTask(), cameras=())
     yield env
     env.close()
 

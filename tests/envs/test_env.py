@@ -8,7 +8,7 @@ from gymnasium.utils.env_checker import check_env
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import open_episode
-from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.insert import HOLE, InsertTask
 from rmb_lerobot.episode import EpisodeWriter
 from rmb_lerobot.pose import pose_to_policy
@@ -26,7 +26,7 @@ def run(env, actions, seed, options=None):
 @pytest.mark.parametrize("mode", ["eef_abs", "eef_rel"])  # joint: every env, test_contract.py
 def test_env_checker_passes(mode):
     cameras = ()
-    env = RmbEnv(InsertTask(), action_mode=mode, cameras=cameras, image_size=(32, 24), depth=True)
+    env = compose(InsertTask(), action_mode=mode, cameras=cameras, image_size=(32, 24), depth=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # advice on unbounded/unnormalised boxes
         check_env(env, skip_render_check=False)
@@ -83,15 +83,15 @@ def test_bad_reset_options_and_constructor_args_are_named(physics_env):
     with pytest.raises(ValueError, match="random_shift must be >= 0"):
         physics_env.reset(options={"random_shift": -1})
     with pytest.raises(ValueError, match="action_mode must be one of"):
-        RmbEnv(InsertTask(), action_mode="torque", cameras=())
+        compose(InsertTask(), action_mode="torque", cameras=())
     with pytest.raises(ValueError, match="unknown camera 'top'"):
-        RmbEnv(InsertTask(), cameras=("top",))
+        compose(InsertTask(), cameras=("top",))
     with pytest.raises(ValueError, match=r"action must have shape \(7,\)"):
         physics_env.step(np.zeros(6))
 
 
 def test_eef_actions_reproduce_the_joint_command():
-    env = RmbEnv(InsertTask(), action_mode="eef_abs", cameras=())
+    env = compose(InsertTask(), action_mode="eef_abs", cameras=())
     env.reset(seed=0)
     pose = env.command_eef_pose
     # eef_abs takes the pose as converted datasets hold it: position + 6-D rotation (9 numbers)
@@ -101,7 +101,7 @@ def test_eef_actions_reproduce_the_joint_command():
     with pytest.raises(ValueError, match="degenerate 6-D rotation"):
         env.command_from_action(np.append(pose[:3], [1, 0, 0, 2, 0, 0, 100.0]))
     env.close()
-    env = RmbEnv(InsertTask(), action_mode="eef_rel", cameras=())
+    env = compose(InsertTask(), action_mode="eef_rel", cameras=())
     env.reset(seed=0)
     down = np.array([0, 0, 0.01, 0, 0, 0, 0.0])  # +z of the flange frame points down
     env.step(down)

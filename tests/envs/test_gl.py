@@ -1,6 +1,9 @@
 """Choice of MuJoCo's OpenGL backend, tested without needing EGL or OSMesa to be present."""
 
-from rmb_lerobot.envs.mujoco.gl import choose_backend, configure_gl_backend
+import subprocess
+import sys
+
+from rmb_lerobot.envs.mujoco.gl import choose_backend, gl_context_class
 
 
 def loads_only(*names):
@@ -10,37 +13,40 @@ def loads_only(*names):
 def test_user_choice_is_kept():
     env = {"MUJOCO_GL": "glfw"}
     assert choose_backend(env, loads_only("EGL", "OSMesa")) == "glfw"
-    assert configure_gl_backend(env, loads_only("EGL")) == "glfw"
+    assert gl_context_class(env, loads_only("EGL"))[0] == "glfw"
     assert env == {"MUJOCO_GL": "glfw"}
 
 
 def test_egl_is_preferred():
-    env = {}
-    assert configure_gl_backend(env, loads_only("EGL", "OSMesa")) == "egl"
-    assert env == {"MUJOCO_GL": "egl", "PYOPENGL_PLATFORM": "egl"}
+    assert choose_backend({}, loads_only("EGL", "OSMesa")) == "egl"
 
 
 def test_falls_back_to_osmesa_without_egl():
-    env = {}
-    assert configure_gl_backend(env, loads_only("OSMesa")) == "osmesa"
-    assert env["MUJOCO_GL"] == "osmesa" and env["PYOPENGL_PLATFORM"] == "osmesa"
+    assert choose_backend({}, loads_only("OSMesa")) == "osmesa"
 
 
 def test_leaves_default_when_nothing_loads():
-    env = {}
-    assert configure_gl_backend(env, loads_only()) is None
-    assert env == {}
+    assert choose_backend({}, loads_only()) is None
 
 
-def test_empty_value_counts_as_unset_and_pyopengl_choice_is_kept():
-    env = {"MUJOCO_GL": "", "PYOPENGL_PLATFORM": "egl"}
-    assert configure_gl_backend(env, loads_only("OSMesa")) == "osmesa"
-    assert env["PYOPENGL_PLATFORM"] == "egl"
+def test_empty_value_counts_as_unset():
+    assert choose_backend({"MUJOCO_GL": ""}, loads_only("OSMesa")) == "osmesa"
 
 
-def test_package_import_selected_a_headless_backend():
-    import os
-
-    import rmb_lerobot.envs  # noqa: F401
-
-    assert os.environ.get("MUJOCO_GL") in ("egl", "osmesa", "glfw", "glx")
+def test_a_renderer_is_headless_whatever_was_imported_first():
+    """With no MUJOCO_GL and ``mujoco`` imported before the package, a renderer still gets
+    EGL's context on this (display-less) machine, and nothing sets MUJOCO_GL for the process."""
+    code = (
+        "import os\n"
+        "for var in ('MUJOCO_GL', 'PYOPENGL_PLATFORM', 'DISPLAY'): os.environ.pop(var, None)\n"
+        "import mujoco\n"
+        "from rmb_lerobot.envs.mujoco.gl import gl_context_class\n"
+        "from rmb_lerobot.envs.registry import ENVS\n"
+        "env = ENVS['insert'].make(cameras=('front',), image_size=(32, 24))\n"
+        "obs, _ = env.reset(seed=0)\n"
+        "assert obs['pixels']['front'].std() > 0, 'blank image'\n"
+        "backend, cls = gl_context_class()\n"
+        "assert backend == 'egl' and cls.__module__ == 'mujoco.egl', (backend, cls)\n"
+        "assert 'MUJOCO_GL' not in os.environ\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.particle import (
     CASE_HEIGHT,
     GOAL,
@@ -24,7 +25,7 @@ ON_GOAL_FLOOR = np.array([*GOAL_CENTRE[:2], RMB_TABLE.table.top_z + PARTICLE_RAD
 
 @pytest.fixture(scope="module")
 def particle_env():
-    env = RmbEnv(ParticleTask(), cameras=())
+    env = compose(ParticleTask(), cameras=())
     yield env
     env.close()
 

@@ -9,6 +9,7 @@ from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.collect import CollectConfig, collect
 from rmb_lerobot.envs.experts.pick import PickExpert
 from rmb_lerobot.envs.lerobot_config import ENV_CONFIGS
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.pick import (
     BASKETS,
     INSTRUCTIONS,
@@ -24,7 +25,7 @@ BLUE, BLACK = BASKETS
 
 @pytest.fixture(scope="module")
 def pick_env():
-    env = RmbEnv(PickTask(), cameras=())
+    env = compose(PickTask(), cameras=())
     yield env
     env.close()
 
@@ -77,7 +78,7 @@ def test_lerobot_vector_env_gives_each_env_its_own_instruction():
         described = vec.call("task_description")
     finally:
         vec.close()
-    env = RmbEnv(PickTask(), cameras=())
+    env = compose(PickTask(), cameras=())
     try:
         expected = []
         for seed in (0, 1):

@@ -21,6 +21,7 @@ from rmb_lerobot.envs.mujoco import meshes
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
 from rmb_lerobot.envs.mujoco.robots import build_ur5e
 from rmb_lerobot.envs.mujoco.scene import build_scene
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.insert import InsertTask
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
@@ -54,8 +55,8 @@ def _actions(env: RmbEnv, steps: int) -> list[np.ndarray]:
 
 @pytest.fixture(scope="module")
 def physics_pair():
-    full = RmbEnv(InsertTask(), cameras=(), render_mode=None, visual_mesh_error=0.0)
-    light = RmbEnv(InsertTask(), cameras=(), render_mode=None)
+    full = compose(InsertTask(), cameras=(), render_mode=None, visual_mesh_error=0.0)
+    light = compose(InsertTask(), cameras=(), render_mode=None)
     yield full, light
     full.close()
     light.close()
@@ -108,7 +109,7 @@ def test_physics_is_identical_with_and_without_simplification(physics_pair):
 
 def test_images_stay_close_to_full_detail():
     envs = [
-        RmbEnv(
+        compose(
             InsertTask(),
             cameras=CAMERAS,
             image_size=(320, 240),

@@ -5,8 +5,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.registry import ENVS
+from rmb_lerobot.envs.registry import ENVS, compose
 from rmb_lerobot.envs.tasks.ring import (
     PEG1,
     PEG2,
@@ -31,7 +30,7 @@ HOOK_POS = RingTask().hook_pos
 
 @pytest.fixture(scope="module")
 def ring_env():
-    env = RmbEnv(RingTask(), cameras=())
+    env = compose(RingTask(), cameras=())
     yield env
     env.close()
 

@@ -6,12 +6,13 @@ import pytest
 
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.experts.toolbox import ToolboxExpert
+from rmb_lerobot.envs.registry import compose
 from rmb_lerobot.envs.tasks.toolbox import MAT, MAT_TOP, TOOLBOX, ToolboxTask
 
 
 @pytest.fixture(scope="module")
 def toolbox_env():
-    env = RmbEnv(ToolboxTask(), cameras=())
+    env = compose(ToolboxTask(), cameras=())
     yield env
     env.close()
 

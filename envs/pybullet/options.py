@@ -1,0 +1,45 @@
+"""The PyBullet backend's options: one typed record, checked when it is made.
+
+Imports no simulator, so the registry can split an env's keyword arguments into these options
+and the env core's without loading PyBullet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rmb_lerobot.envs.images import DEFAULT_IMAGE_SIZE, check_image_size
+
+RENDERERS = ("auto", "egl", "tiny")
+TACTILE_IMAGE_SIZE = (640, 480)  # (width, height) RMB records: TACTO's 640 x 480, rotated
+
+
+@dataclass(frozen=True)
+class PybulletOptions:
+    """How a :class:`~rmb_lerobot.envs.pybullet.backend.PybulletBackend` builds and renders.
+
+    Attributes:
+        image_size: ``(width, height)`` of camera images.
+        renderer: ``"egl"`` (PyBullet's EGL plugin: OpenGL, headless), ``"tiny"``
+            (TinyRenderer, CPU) or ``"auto"`` (EGL, else TinyRenderer with a warning).
+        tactile_size: ``(width, height)`` of the fingertip tactile images (RMB: 640 x 480; a
+            smaller size renders faster and is what policies train on).
+        tactile_noise: Add the DIGIT-like sensor noise (sigma 7 of 255) to tactile images, as
+            TACTO does; off gives noise-free, deterministic images.
+        shadows: PyBullet's shadow pass in camera images (RMB renders with shadows).
+
+    Raises:
+        ValueError: an unknown renderer or a bad size.
+    """
+
+    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
+    renderer: str = "auto"
+    tactile_size: tuple[int, int] = (80, 60)
+    tactile_noise: bool = True
+    shadows: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "image_size", check_image_size(self.image_size))
+        object.__setattr__(self, "tactile_size", check_image_size(self.tactile_size))
+        if self.renderer not in RENDERERS:
+            raise ValueError(f"renderer must be one of {RENDERERS}, got {self.renderer!r}")

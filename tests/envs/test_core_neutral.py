@@ -1,0 +1,221 @@
+"""The env core runs on any backend: a fake one (no simulator) through reset, step and record.
+
+Proof that the core does not assume MuJoCo: a backend written here in plain numpy (a point arm
+whose joints follow their command in one step, a fixed "camera" painting the joint vector) runs
+``RmbEnv`` in every action mode, its episodes record and read back as RMB episodes, and none of
+it (nor importing the package and its registry) loads ``mujoco`` or ``pybullet``.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from collections.abc import Sequence
+from typing import ClassVar
+
+import numpy as np
+import pytest
+
+from rmb_lerobot import keys as K
+from rmb_lerobot.envs.backend import Backend
+from rmb_lerobot.envs.base import RmbEnv
+from rmb_lerobot.envs.robots import Arm, Gripper, Pose, Robot
+from rmb_lerobot.envs.scene import SceneState
+from rmb_lerobot.envs.tasks.base import Task
+from rmb_lerobot.envs.workspace import RMB_TABLE
+from rmb_lerobot.episode import EpisodeWriter, open_episode
+
+POINT_ARM = Robot(
+    name="point",
+    rmb_name="Point",
+    arms=(
+        Arm(
+            name="arm",
+            joints=("x", "y", "z"),
+            home=(0.0, 0.0, 0.5),
+            gripper=Gripper(joints=("finger",), open=0.0, closed=1.0, measured_scale=1.0),
+            mount=Pose(),
+            root_frame="base",
+            eef_frame="tip",
+            tcp_frame="tip",
+            hand_frame="tip",
+        ),
+    ),
+)
+
+
+class PointScene(SceneState):
+    """The tip is the only body: its position is the arm's joint vector."""
+
+    def __init__(self, backend: FakeBackend) -> None:
+        self.backend = backend
+
+    def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        if name != "tip":
+            raise KeyError(name)
+        return self.backend.q[:3].copy(), np.eye(3)
+
+    geom_pose = site_pose = body_pose
+
+    def joint_position(self, name: str) -> np.ndarray:
+        return self.backend.q[["x", "y", "z"].index(name)][None].copy()
+
+    def joint_velocity(self, name: str) -> np.ndarray:
+        return np.zeros(1)
+
+    def body_positions(self, names: Sequence[str]) -> np.ndarray:
+        return np.array([self.body_pose(n)[0] for n in names])
+
+    def points(self, name: str) -> np.ndarray:
+        raise KeyError(name)
+
+
+class FakeBackend(Backend):
+    """A point arm in plain numpy: joints reach their command in one step; eef = joints."""
+
+    simulator: ClassVar[str] = "mujoco"  # names only (rmb_env_name); nothing MuJoCo is used
+    cameras = ("front",)
+
+    def __init__(self, task: Task, with_scene: bool = True) -> None:
+        self.task, self.robot, self.workspace = task, POINT_ARM, task.workspace
+        self.image_size = (8, 6)
+        self.control_dt = 0.02
+        self.q = np.zeros(4)
+        self.target = np.zeros(4)
+        self.t = 0.0
+        self._scene = PointScene(self) if with_scene else None
+
+    @property
+    def scene(self) -> SceneState | None:
+        return self._scene
+
+    def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
+        self.q, self.target, self.t = home.copy(), home.copy(), 0.0
+
+    def apply_command(self, command: np.ndarray) -> None:
+        self.target = command.copy()
+
+    def step(self) -> None:
+        self.q, self.t = self.target.copy(), self.t + self.control_dt
+
+    @property
+    def time(self) -> float:
+        return self.t
+
+    def joint_limits(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        return ((np.full(3, -1.0), np.full(3, 1.0)),)
+
+    def measured_joint_pos(self) -> np.ndarray:
+        return self.q.copy()
+
+    def measured_joint_vel(self) -> np.ndarray:
+        return np.zeros(4)
+
+    def measured_wrench(self) -> np.ndarray:
+        return np.zeros(6)
+
+    def render(self, cameras, *, rgb=True, depth=False):
+        width, height = self.image_size
+        value = np.uint8(np.clip(self.q[0] * 100 + 100, 0, 255))
+        images = {c: np.full((height, width, 3), value, np.uint8) for c in cameras}
+        depths = {c: np.full((height, width), 1.0, np.float32) for c in cameras} if depth else {}
+        return (images if rgb else {}), depths
+
+    def fovy(self, camera: str) -> float:
+        return 45.0
+
+    def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:
+        return np.array([*q_arm[:3], 1.0, 0.0, 0.0, 0.0])
+
+    def ik(self, arm: int, target: np.ndarray, q_init: np.ndarray) -> np.ndarray:
+        return np.clip(target[:3], -1.0, 1.0)
+
+    def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        return np.array([*pos, 1.0, 0.0, 0.0, 0.0])
+
+
+class ReachTask(Task):
+    """Move the tip above x = 0.3 (three worlds that differ in nothing the fake backend sees)."""
+
+    name = "reach"
+    description = "Reach forward."
+    world_offsets = np.zeros((3, 3))
+    max_episode_steps = 10
+
+    def is_success(self, scene: SceneState) -> bool:
+        return bool(scene.body_pose("tip")[0][0] > 0.3)
+
+
+def make_env(**kwargs) -> RmbEnv:
+    return RmbEnv(ReachTask(RMB_TABLE), FakeBackend(ReachTask(RMB_TABLE)), **kwargs)
+
+
+@pytest.mark.parametrize("mode", ["joint", "eef_abs", "eef_rel"])
+def test_fake_backend_runs_the_core_in_every_action_mode(mode):
+    env = make_env(action_mode=mode, cameras=("front",), depth=True)
+    obs, info = env.reset(seed=0, options={"world_idx": 2})
+    assert info == {"is_success": False, "world_idx": 2}
+    assert obs["pixels"]["front"].shape == (6, 8, 3)
+    assert obs["depth"]["front"].dtype == np.uint16
+    assert env.metadata["render_fps"] == 50  # from the backend's 0.02 s period
+    for _ in range(5):
+        if mode == "joint":
+            action = np.array([0.5, 0.0, 0.5, 0.0])
+        elif mode == "eef_abs":
+            action = np.zeros(env.action_space.shape)
+            action[:3] = (0.5, 0.0, 0.5)
+            action[3:9] = (1, 0, 0, 0, 1, 0)  # identity rotation, 6-D
+        else:
+            action = np.zeros(env.action_space.shape)
+            action[0] = 0.2
+        obs, reward, terminated, _, info = env.step(action)
+        if terminated:
+            break
+    assert info["is_success"] and reward == 1.0 and terminated
+    assert env.measured_joint_pos()[0] > 0.3
+
+
+def test_a_backend_without_a_scene_never_succeeds():
+    env = RmbEnv(ReachTask(), FakeBackend(ReachTask(), with_scene=False), cameras=())
+    env.reset(seed=0)
+    _, reward, terminated, _, info = env.step(np.array([0.9, 0.0, 0.5, 0.0]))
+    assert (reward, terminated, info["is_success"]) == (0.0, False, False)
+
+
+def test_worlds_come_from_the_task():
+    env = make_env(cameras=())
+    worlds = {env.reset(seed=seed)[1]["world_idx"] for seed in range(40)}
+    assert worlds == {0, 1, 2}
+    with pytest.raises(ValueError, match=r"world_idx must be an integer in 0\.\.2"):
+        env.reset(options={"world_idx": 3})
+
+
+def test_fake_backend_episode_records_and_reads_back(tmp_path):
+    env = make_env(cameras=("front",))
+    env.reset(seed=1, options={"world_idx": 0})
+    path = tmp_path / "reach.rmb"
+    with EpisodeWriter(path, {**env.rmb_attrs(), "demo_name": "reach"}) as writer:
+        for x in (0.1, 0.2, 0.4):
+            action = np.array([x, 0.0, 0.5, 0.0])
+            writer.append(env.rmb_step_data(action))
+            env.step(action)
+    with open_episode(path) as episode:
+        assert episode.attrs[K.ATTR_ENV] == "MujocoPointReachEnv"
+        np.testing.assert_allclose(episode[K.COMMAND_JOINT_POS][:, 0], [0.1, 0.2, 0.4])
+        np.testing.assert_allclose(episode[K.TIME], [0.0, 0.02, 0.04])
+        assert episode[K.rgb_image_key("front")].shape == (3, 6, 8, 3)
+
+
+def test_importing_the_core_loads_no_simulator():
+    code = (
+        "import os, sys\n"
+        "for var in ('MUJOCO_GL', 'PYOPENGL_PLATFORM'): os.environ.pop(var, None)\n"
+        "import rmb_lerobot, rmb_lerobot.envs.base, rmb_lerobot.envs.registry\n"
+        "import rmb_lerobot.envs.experts.base\n"
+        "from rmb_lerobot.envs.registry import ENVS\n"
+        "[entry.load_task_class()(entry.workspace) for entry in ENVS.values()]\n"
+        "loaded = sorted(m for m in ('mujoco', 'pybullet') if m in sys.modules)\n"
+        "assert not loaded, loaded\n"
+        "assert 'MUJOCO_GL' not in os.environ, os.environ['MUJOCO_GL']\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
