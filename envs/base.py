@@ -3,10 +3,11 @@
 :class:`RmbEnv` composes a :class:`~rmb_lerobot.envs.tasks.base.Task`, a backend
 (:mod:`rmb_lerobot.envs.backend`: MuJoCo, PyBullet, or anything that implements it) with its
 robot record (:mod:`rmb_lerobot.envs.robots`), and owns everything that does not depend on the
-simulator: the gymnasium API, the reset-option protocol, the action mode (:mod:`rmb_lerobot.envs.actions`), LeRobot's observation contract
-(``pixels``, ``agent_pos``, optional ``depth``), success and termination, and what recorders
-get: every RMB key through :meth:`RmbEnv.rmb_step_data` and the episode attributes through
-:meth:`RmbEnv.rmb_attrs`, which keeps the observation space small.
+simulator: the gymnasium API, the reset-option protocol, the action mode
+(:mod:`rmb_lerobot.envs.actions`), LeRobot's observation contract (``pixels``, ``agent_pos``,
+optional ``depth``), success and termination, and what recorders get: every RMB key through
+:meth:`RmbEnv.rmb_step_data` and the episode attributes through :meth:`RmbEnv.rmb_attrs`,
+which keeps the observation space small.
 """
 
 from __future__ import annotations
@@ -152,9 +153,10 @@ class RmbEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start an episode. ``options``: ``world_idx`` (0 .. the task's ``num_worlds`` - 1;
-        default drawn from the env's generator), ``random_shift`` (metres; default the constructor's) and the task's own
-        (``Task.reset_options``, e.g. Pick's ``instruction``). Options LeRobot's rollout loop
-        adds (``lerobot_*``, e.g. ``lerobot_new_rollout``) are ignored."""
+        default drawn from the env's generator), ``random_shift`` (metres; default the
+        constructor's) and the task's own (``Task.reset_options``, e.g. Pick's
+        ``instruction``). Options LeRobot's rollout loop adds (``lerobot_*``, e.g.
+        ``lerobot_new_rollout``) are ignored."""
         super().reset(seed=seed)
         options = {k: v for k, v in (options or {}).items() if not k.startswith("lerobot_")}
         known = ("world_idx", "random_shift", *self.task.reset_options)

@@ -60,6 +60,8 @@ class CollectConfig:
     cycle_variants: bool = False
     # Record RMB's fingertip tactile grids (left_tactile_sensor, right_tactile_sensor: 5 x 8).
     tactile: bool = False
+    # Fingertip tactile image size (W, H) of the PyBullet envs; None: the backend's default.
+    tactile_size: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if self.world_idx is None:
@@ -94,7 +96,10 @@ class Collector:
             image_size=config.image_size,
             depth=config.depth,
             random_shift=config.random_shift,
-            tactile=config.tactile,
+            # MuJoCo's fingertip grids are a backend option; PyBullet's tactile images are
+            # cameras (--cameras tactile_left tactile_right).
+            **({"tactile": True} if config.tactile else {}),
+            **({"tactile_size": config.tactile_size} if config.tactile_size else {}),
         )
         self.expert = entry.load_expert_class()(self.env)
         self.variants = self.env.task.episode_variants() if config.cycle_variants else ()

@@ -14,7 +14,8 @@ robots' entries are named ``<robot>_<task>`` (``xarm7_cable``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import inspect
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
@@ -25,6 +26,7 @@ from rmb_lerobot.envs.workspace import (
     DUAL_TABLE,
     RMB_TABLE,
     TACTO_FLOOR,
+    TACTO_SPOON_FLOOR,
     XARM_TABLE,
     Workspace,
 )
@@ -105,8 +107,10 @@ class EnvEntry:
 
     @property
     def cameras(self) -> tuple[str, ...]:
-        """Every camera of the env: the workspace's fixed ones, then the robot's."""
-        return (*self.workspace.camera_names, *self.robot_record.cameras)
+        """Every camera of the env: the workspace's fixed ones, then the robot's, then its
+        fingertip tactile image sensors (RMB's ``rgb_tactile_names``, recorded as cameras)."""
+        robot = self.robot_record
+        return (*self.workspace.camera_names, *robot.cameras, *robot.tactile_sensors)
 
     def make(self, **kwargs: Any) -> RmbEnv:
         """This entry's env core, without time limit (keyword arguments: :func:`compose`'s)."""
@@ -118,6 +122,9 @@ class EnvEntry:
 
     def load_expert_class(self) -> type:
         return load_target(self.expert_class)
+
+
+_POSITIONAL = ("self", "task", "backend")
 
 
 def compose(
@@ -146,6 +153,14 @@ def compose(
     sim = simulator_for(simulator)
     robot = robot_for(robot) if isinstance(robot, str) else robot
     options, env_kwargs = sim.split_options(kwargs)
+    accepted = [n for n in inspect.signature(RmbEnv.__init__).parameters if n not in _POSITIONAL]
+    unknown = sorted(set(env_kwargs) - set(accepted))
+    if unknown:
+        backend_options = [f.name for f in fields(sim.options_class())]
+        raise TypeError(
+            f"{simulator} envs take no option {', '.join(unknown)}; backend options: "
+            f"{', '.join(backend_options)}; env options: {', '.join(accepted)}"
+        )
     backend = sim.backend_class()(task, robot, task.workspace, options)
     try:
         return RmbEnv(task, backend, **env_kwargs)
@@ -219,6 +234,8 @@ ENVS: dict[str, EnvEntry] = {
         ),
         # RMB's PyBullet TACTO envs: the Sawyer with DIGIT fingertip sensors.
         _tacto_entry("grasp", "TactoGraspTask", "TactoGraspExpert", TACTO_FLOOR),
+        _tacto_entry("insert", "TactoInsertTask", "TactoInsertExpert", TACTO_FLOOR),
+        _tacto_entry("spoon", "TactoSpoonTask", "TactoSpoonExpert", TACTO_SPOON_FLOOR),
     )
 }
 """Every environment by short name (:attr:`EnvEntry.name`): the source of truth for names."""

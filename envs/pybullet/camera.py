@@ -235,9 +235,21 @@ def render(
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """RGB and/or metric depth as RMB's TACTO envs record them.
 
-    Measured here (Mesa llvmpipe, no GPU), RMB's "front" camera at 640x480 over a plane and a
-    box: RGB + depth 8.8 ms with EGL, 18 ms with TinyRenderer; depth only (no shadow pass)
-    7.0 ms / 9.7 ms (median of 20 frames each).
+    Measured, RMB's "front" camera at 640x480 over a floor and a cube, median of 20 frames,
+    RGB + depth / depth only:
+
+    ============================================  ================  ================
+    machine, pybullet build                       EGL               TinyRenderer
+    ============================================  ================  ================
+    H200 + 16 cores, NVIDIA EGL, numpy build      8.8 / 11 ms       159 / 91 ms
+    H200 + 16 cores, NVIDIA EGL, no-numpy build   111 / 76 ms       221 / 148 ms
+    2 cores (loaded), llvmpipe, numpy build       95 / 89 ms        349 / 198 ms
+    2 cores (loaded), llvmpipe, no-numpy build    340 / 330 ms      550 / 380 ms
+    ============================================  ================  ================
+
+    uv's isolated sdist build of pybullet has no numpy (``p.isNumpyEnabled() == 0``), so
+    ``getCameraImage`` builds 1.8 M Python numbers per 640x480 frame: that, not drawing,
+    dominates unless pybullet is built with numpy importable.
 
     Args:
         client: An open client from :func:`rmb_lerobot.envs.pybullet.client.connect`.

@@ -8,20 +8,21 @@ it works here, else through its built-in software TinyRenderer.
 Every call passes ``physicsClientId`` explicitly (as ``pybullet_utils.bullet_client`` does), so
 several clients in one process never touch each other or PyBullet's implicit default client.
 
-Found while building this (pybullet 3.2.7; each crashes the process, no exception):
+Found while building this (pybullet 3.2.7), all of which would otherwise end or corrupt the
+process with no Python exception:
 
 - The EGL plugin ``exit(1)``s when EGL is unusable, so :func:`connect` probes it in a child
   process first. On a GPU machine whose image had NVIDIA's ``libEGL_nvidia`` but no libglvnd
   ``libEGL.so.1`` it failed ("failed to EGL with glad."); with ``libEGL.so.1`` added it
   rendered on the GPU (``GL_RENDERER=NVIDIA H200/PCIe/SSE2``).
-- With the EGL plugin, a body whose visual is ``GEOM_PLANE`` (or a collision-only
-  ``GEOM_PLANE`` body, whose visual PyBullet derives from it) segfaults in
-  ``createMultiBody``: build floors as thin boxes or load ``plane.urdf`` (a mesh).
+- With the EGL plugin, creating a body whose visual is ``GEOM_PLANE`` (or a collision-only
+  ``GEOM_PLANE`` body, whose visual PyBullet derives from it) segfaults: build floors as
+  thin boxes or load ``plane.urdf`` (a mesh).
 - Two EGL clients in one process draw into each other's GL context (the plugin makes its
-  context current once, when loaded), and rendering an EGL client from a thread other than
-  the one that connected it segfaults: one EGL client per process, used from its own thread
-  (both enforced here: the second EGL client falls back or raises, :meth:`PybulletClient.
-  check_render_thread` raises).
+  context current once, when loaded): the second EGL client is refused ("egl") or falls
+  back to TinyRenderer ("auto").
+- Rendering an EGL client from a thread other than the one that connected it segfaults:
+  :meth:`PybulletClient.check_render_thread` raises instead.
 
 Example:
     >>> from rmb_lerobot.envs.pybullet.client import PhysicsSettings, connect
@@ -182,7 +183,8 @@ def _egl_probe_failure(path: str) -> str | None:
     The plugin calls ``exit(EXIT_FAILURE)`` on every EGL error (no libEGL, no device, a bad
     ``EGL_VISIBLE_DEVICES`` index, no context: ``EGLOpenGLWindow.cpp:115-283``), which would end
     this process with no exception to catch, so it is first loaded and used once in a child
-    with this process's environment. The answer is cached per process (about 0.3 s once).
+    with this process's environment. The answer is cached per process (1.2 s once,
+    measured on the 2-core dev machine).
     """
     try:
         done = subprocess.run(
@@ -385,9 +387,10 @@ def connect(settings: PhysicsSettings | None = None, renderer: Renderer = "auto"
     only for the client that asks. PyBullet's plugin honours ``EGL_VISIBLE_DEVICES`` (an index
     into ``eglQueryDevicesEXT``'s list); nothing else in the environment is read or changed.
 
-    Measured on this machine (Mesa llvmpipe, no GPU), 640x480 RGB + depth of RMB's "front"
-    camera over a plane and a box: EGL 8.8 ms, TinyRenderer 18 ms per frame (median of 20);
-    connecting costs about 0.3 s once per process for the EGL probe, plus 5 ms per client.
+    Connect costs, measured (2-core dev machine, Mesa llvmpipe, load average ~5 from other
+    work): the EGL probe 1.2 s once per process, then 0.6 s per EGL client (llvmpipe start;
+    0.1 s on an H200 with NVIDIA's EGL), 30-40 ms per TinyRenderer client. Frame times are in
+    :func:`rmb_lerobot.envs.pybullet.camera.render`.
 
     Args:
         settings: Physics settings; ``None`` means RMB's (:class:`PhysicsSettings`).

@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from rmb_lerobot.envs.images import DEFAULT_IMAGE_SIZE, check_image_size
 
 RENDERERS = ("auto", "egl", "tiny")
-TACTILE_IMAGE_SIZE = (640, 480)  # (width, height) RMB records: TACTO's 640 x 480, rotated
 
 
 @dataclass(frozen=True)
@@ -22,8 +21,9 @@ class PybulletOptions:
         image_size: ``(width, height)`` of camera images.
         renderer: ``"egl"`` (PyBullet's EGL plugin: OpenGL, headless), ``"tiny"``
             (TinyRenderer, CPU) or ``"auto"`` (EGL, else TinyRenderer with a warning).
-        tactile_size: ``(width, height)`` of the fingertip tactile images (RMB: 640 x 480; a
-            smaller size renders faster and is what policies train on).
+        tactile_size: ``(width, height)`` of the fingertip tactile images; None (default): the
+            camera images' size, so demos recorded at one size and LeRobot env types (one image
+            size for every camera) agree; RMB records both at 640 x 480.
         tactile_noise: Add the DIGIT-like sensor noise (sigma 7 of 255) to tactile images, as
             TACTO does; off gives noise-free, deterministic images.
         shadows: PyBullet's shadow pass in camera images (RMB renders with shadows).
@@ -34,12 +34,13 @@ class PybulletOptions:
 
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
     renderer: str = "auto"
-    tactile_size: tuple[int, int] = (80, 60)
+    tactile_size: tuple[int, int] | None = None
     tactile_noise: bool = True
     shadows: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "image_size", check_image_size(self.image_size))
-        object.__setattr__(self, "tactile_size", check_image_size(self.tactile_size))
+        size = self.image_size if self.tactile_size is None else self.tactile_size
+        object.__setattr__(self, "tactile_size", check_image_size(size))
         if self.renderer not in RENDERERS:
             raise ValueError(f"renderer must be one of {RENDERERS}, got {self.renderer!r}")

@@ -77,6 +77,10 @@ class DigitConfig:
         noise_sigma: Gaussian noise standard deviation on 0..255 (TACTO: 7).
         zrange: Indentation that maps to full scale in :func:`depth_image`, metres (TACTO:
             0.002 m).
+        contact_gain: 0..255 counts added to every channel at an indentation of ``zrange`` (in
+            proportion below it): TACTO's point lights light a surface pressed towards them
+            more brightly, so a flat press (a box face filling the gel, which slope shading
+            alone leaves at the reference colour) shows as a brighter patch; 0 turns it off.
     """
 
     height: int = 480
@@ -92,6 +96,7 @@ class DigitConfig:
     background: tuple[int, int, int] = (128, 128, 128)
     noise_sigma: float = 7.0
     zrange: float = 0.002
+    contact_gain: float = 60.0
 
     def __post_init__(self) -> None:
         """Rejects sizes and lights that would give an empty or ill-shaped image.
@@ -234,6 +239,8 @@ def _add_shading(planes: np.ndarray, h: np.ndarray, cfg: DigitConfig, lights: _L
     ``n = (-dh/du, -dh/dv, 1) / norm``. Each light adds ``gain * colour * (max(0, n.l) - l_w)``,
     the change from the flat gel's ``n.l = l_w``, so a flat patch changes nothing.
 
+    Where indented, every channel also brightens by ``contact_gain * min(h / zrange, 1)``.
+
     Channel-planar float32 with in-place operations: 5.3 ms for a fully indented 480 x 640 map
     (with the uint8 conversion) against 12 ms writing an interleaved ``(H, W, 3)`` array and
     30 ms with temporaries per light (best of 40 on this 2-core machine under load).
@@ -266,6 +273,10 @@ def _add_shading(planes: np.ndarray, h: np.ndarray, cfg: DigitConfig, lights: _L
             done = k
         np.multiply(cos, gain, out=tmp)
         planes[ch] += tmp
+    if cfg.contact_gain:
+        np.multiply(h, np.float32(cfg.contact_gain / cfg.zrange), out=tmp)
+        np.minimum(tmp, np.float32(cfg.contact_gain), out=tmp)
+        planes += tmp
 
 
 @functools.cache

@@ -63,6 +63,15 @@ def build_parser() -> argparse.ArgumentParser:
         "right_tactile_sensor: 5 x 8 normal forces in N; UR5e)",
     )
     parser.add_argument(
+        "--tactile-size",
+        type=int,
+        nargs=2,
+        default=None,
+        metavar=("W", "H"),
+        help="size of the fingertip tactile images of the PyBullet (TACTO) envs, recorded as "
+        "tactile_left/right_rgb_image (default: --image-size; RMB records both at 640 480)",
+    )
+    parser.add_argument(
         "--success-only", action="store_true", help="keep only successful episodes (retrying)"
     )
     parser.add_argument("--workers", type=int, default=1, help="parallel worker processes")
@@ -119,6 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 overwrite=args.overwrite,
                 cycle_variants=args.cycle_instructions,
                 tactile=args.tactile,
+                tactile_size=None if args.tactile_size is None else tuple(args.tactile_size),
             )
             kept = successes = 0
             run = collect(config, workers=args.workers)

@@ -9,6 +9,7 @@ import threading
 import pybullet as p
 import pytest
 
+from rmb_lerobot.envs.pybullet import client as client_module
 from rmb_lerobot.envs.pybullet.client import (
     PhysicsSettings,
     PybulletClient,
@@ -192,3 +193,22 @@ def test_egl_refuses_to_render_from_another_thread() -> None:
 def test_tiny_renders_from_any_thread() -> None:
     with connect(renderer="tiny") as client:
         assert _call_in_thread(lambda: client.getCameraImage(8, 8)) is None
+
+
+def test_auto_falls_back_with_one_warning_naming_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fallback path on every machine: pretend libEGL is missing."""
+    monkeypatch.setattr(client_module, "_libegl_failure", lambda: "libEGL.so.1 cannot be loaded")
+    with pytest.warns(RuntimeWarning, match="libEGL.so.1 cannot be loaded") as record:
+        with connect(renderer="auto") as client:
+            assert client.renderer == "tiny"
+    assert len(record) == 1
+    with pytest.raises(RuntimeError, match="libEGL.so.1 cannot be loaded"):
+        connect(renderer="egl")
+
+
+def test_probe_reports_a_dying_plugin(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The plugin exits its process on EGL errors; the child probe turns that into a reason."""
+    dying = "import sys; print('failed to EGL with glad.', file=sys.stderr); sys.exit(1)"
+    monkeypatch.setattr(client_module, "_PROBE_SOURCE", dying)
+    reason = client_module._egl_probe_failure.__wrapped__("unused")
+    assert "exit code 1" in reason and "failed to EGL with glad." in reason

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -108,8 +109,18 @@ def test_no_contact_is_exactly_the_reference():
     np.testing.assert_array_equal(sensor.render(nothing, 30.0), ref)
     np.testing.assert_array_equal(sensor.render(sphere_gap(CFG, R), 0.0), ref)
     np.testing.assert_array_equal(shade(np.zeros((480, 640)), CFG), ref)
-    # A flat press has no slope, so no colour change either.
-    np.testing.assert_array_equal(shade(np.full((480, 640), 0.001), CFG), ref)
+
+
+def test_a_flat_press_brightens_evenly_with_depth():
+    """A box face filling the gel has no slope: only the contact brightening shows it, evenly,
+    by ``contact_gain`` at ``zrange`` and in proportion below."""
+    ref = reference_image(CFG).astype(int)
+    half = shade(np.full((480, 640), CFG.zrange / 2), CFG).astype(int) - ref
+    full = shade(np.full((480, 640), 3 * CFG.zrange), CFG).astype(int) - ref
+    assert np.all(np.abs(half - CFG.contact_gain / 2) <= 1)
+    assert np.all(full == CFG.contact_gain)
+    flat = replace(CFG, contact_gain=0.0)
+    np.testing.assert_array_equal(shade(np.full((480, 640), 0.001), flat), ref)
 
 
 @pytest.mark.parametrize("force", [10.0, 40.0, 100.0])
