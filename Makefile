@@ -12,9 +12,9 @@ export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
 VENV := .venv
 # Optional extras the test suite exercises (VLA policies to their download boundary, MT-ACT's
-# sentence encoder, rmb-benchmark on Ray, rmb-data view). `keyboard` (Linux input devices) is left
+# sentence encoder, rmb-benchmark on Ray, rmb-data view, the PyBullet TACTO envs). `keyboard` (Linux input devices) is left
 # out: its tests use a test double.
-EXTRAS := --extra vla --extra text --extra benchmark --extra viz
+EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet
 STAMP := $(VENV)/.synced
 
 .PHONY: help setup demo test lint format bench bench-learning bench-grid clean

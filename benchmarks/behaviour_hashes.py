@@ -6,12 +6,12 @@ Run it on the same machine before and after a change and compare::
     # ... refactor ...
     .venv/bin/python benchmarks/behaviour_hashes.py --compare before.jsonl
 
-Each episode (expert in ``joint`` and ``eef_rel`` modes, worlds ``i % 6``, seed ``i``, random
-shift 0.03 m) is hashed over every action, every observation (joint state and a 32x32 front
-image, so the scene's composition and lighting count) and every value ``rmb_step_data`` gives
-a recorder, plus the episode attributes. The hashes are bit-exact, so they only mean something
-on one machine: MuJoCo's last bits differ between CPUs (never compare across machines, and
-never put these numbers in a test).
+Each episode (expert in ``joint`` and ``eef_rel`` modes, worlds ``i % num_worlds``, seed
+``i``, random shift 0.03 m) is hashed over every action, every observation (joint state and a
+32x32 front image, so the scene's composition and lighting count) and every value
+``rmb_step_data`` gives a recorder, plus the episode attributes. The hashes are bit-exact, so
+they only mean something on one machine: MuJoCo's last bits differ between CPUs (never compare
+across machines, and never put these numbers in a test).
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def episode_fingerprint(task: str, mode: str, episode: int) -> dict:
         core = env.unwrapped
         expert = ENVS[task].load_expert_class()(core)
         digest = hashlib.sha256()
-        options = {"world_idx": episode % 6, "random_shift": 0.03}
+        options = {"world_idx": episode % core.task.num_worlds, "random_shift": 0.03}
         obs, info = env.reset(seed=episode, options=options)
         expert.reset()
         _update(digest, core.rmb_attrs())

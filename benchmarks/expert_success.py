@@ -1,14 +1,14 @@
-"""Success rate of the scripted experts over worlds 0..5 with a random object shift.
+"""Success rate of the scripted experts over every world of a task with a random object shift.
 
 Usage::
 
     .venv/bin/python benchmarks/expert_success.py [--episodes 100] [--random-shift 0.03]
         [--tasks insert door] [--action-mode joint] [--cycle-instructions]
 
-Episode ``i`` uses ``world_idx = i % 6`` and seed ``i``; physics only (no cameras). With
-``--cycle-instructions`` (Pick) episode ``i`` gets instruction ``(i // 6) % 18``, as
-``rmb-collect --cycle-instructions`` records them, and the success rate per instruction is
-printed too.
+Episode ``i`` uses ``world_idx = i % num_worlds`` (six for the MuJoCo tasks) and seed ``i``;
+physics only (no cameras). With ``--cycle-instructions`` (Pick) episode ``i`` gets
+instruction ``(i // 6) % 18``, as ``rmb-collect --cycle-instructions`` records them, and the
+success rate per instruction is printed too.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def success_rate(
     successes, steps, failed = 0, 0, []
     per_variant: dict[str, list[bool]] = {}
     for episode in range(episodes):
-        options = {"world_idx": episode % 6, "random_shift": random_shift}
+        options = {"world_idx": episode % env.task.num_worlds, "random_shift": random_shift}
         if variants:  # as rmb-collect --cycle-instructions: each variant across the worlds
             options.update(variants[(episode // 6) % len(variants)])
         obs, _ = env.reset(seed=episode, options=options)

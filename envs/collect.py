@@ -37,6 +37,7 @@ from rmb_lerobot.staging import remove_stale
 
 logger = logging.getLogger(__name__)
 
+
 @dataclass(frozen=True)
 class CollectConfig:
     """What to record; picklable, so workers can rebuild the env from it."""

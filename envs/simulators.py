@@ -12,6 +12,7 @@ chooses a backend.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
@@ -42,6 +43,8 @@ class Simulator:
     backend: str  # "module:Class" of its Backend
     options: str  # "module:Class" of the backend's options dataclass
     control_dt: float  # seconds per env step with default options
+    requires: str | None = None  # the module the backend needs, and the extra that installs it
+    extra: str | None = None
 
     @property
     def fps(self) -> int:
@@ -49,6 +52,16 @@ class Simulator:
         return frames_per_second(self.control_dt)
 
     def backend_class(self) -> type[Backend]:
+        """The backend class (imports the simulator).
+
+        Raises:
+            ImportError: the simulator is not installed (the message names the extra).
+        """
+        if self.requires is not None and importlib.util.find_spec(self.requires) is None:
+            raise ImportError(
+                f"{self.rmb_name} envs need {self.requires!r}, which is not installed: "
+                f"pip install 'lerobot_env_rmb[{self.extra}]'"
+            )
         return load_target(self.backend)
 
     def options_class(self) -> type:
@@ -81,6 +94,8 @@ SIMULATORS: dict[str, Simulator] = {
             "rmb_lerobot.envs.pybullet.backend:PybulletBackend",
             "rmb_lerobot.envs.pybullet.options:PybulletOptions",
             0.005 * 6,  # RMB: timestep 0.005 s, 6 substeps
+            requires="pybullet",
+            extra="pybullet",
         ),
     )
 }

@@ -58,7 +58,7 @@ class TactoInsertExpert(GripperExpert):
     align_tol = 0.002  # board end over the slot centre before lowering (m)
     tilt_tol = np.deg2rad(1.0)  # board axis from vertical before lowering
     lower_speed = 0.06  # m/s while lowering into the slot
-    final_depth = 0.004  # board end above the slot floor at the lowest target (m)
+    final_depth = 0.004  # board end above the floor at the lowest target (m)
 
     def on_reset(self) -> None:
         super().on_reset()
@@ -161,7 +161,10 @@ class TactoInsertExpert(GripperExpert):
                 self.phase = Phase.LOWER
             return Waypoint(self._pinch_for_end(entry), self._stand_rot, closed)
         box = self.scene.body_pose(BOX)[0]
-        bottom = np.array([box[0], box[1], box[2] + SLOT_FLOOR_Z + self.final_depth])
+        # The slot floor is 3 mm below the ground (RMB's box sinks 1 cm into it): the board
+        # stands on the ground there.
+        floor = max(box[2] + SLOT_FLOOR_Z, self.table_z())
+        bottom = np.array([box[0], box[1], floor + self.final_depth])
         target = self._pinch_for_end(bottom)
         step = self.lower_speed * self.dt
         delta = target - self._ref_pos

@@ -1,8 +1,13 @@
 """Scripted expert for TactoSawyerSpoon: pinch the spoon's upper end, sort it into its box.
 
-Privileged: it reads the spoon's pose from the simulator, and from it which end is up (the
-world's goal: the red box for bowl down, the green one for bowl up), which a learned policy has
-to feel with the fingertip sensors instead.
+Privileged: it reads the spoon's pose from the simulator (where its upper end is) and the world
+index (the goal box: red for bowl down, green for bowl up), which a learned policy has to feel
+with the fingertip sensors instead.
+
+Measured (``reset(seed=i, options={"world_idx": i % 2})``, no cameras): 100 / 100 episodes in
+``action_mode="joint"`` (mean 225.0 steps to success: 240 in world 0, 210 in world 1) and
+100 / 100 in ``"eef_rel"`` (mean 222.6); with a 0.03 m random shift 50 / 50 in each mode (mean
+222 steps, at most 245).
 """
 
 from __future__ import annotations
@@ -38,10 +43,12 @@ class Phase(Enum):
 class TactoSpoonExpert(GripperExpert):
     """Tool point: the pinch point between the pads. Phases: above the spoon's upper end (the
     handle's tip in world 0, the bowl's rim in world 1) with the gripper open as RMB's pre-motion
-    (0.04), the hand turned so the pads close across the spoon's thickness; down until the pads
-    cover the top ``grasp_depth`` of the spoon; close; lift until the spoon's lower end clears
-    the start box's walls; carry it over the goal box; lower it until its lower end is just above
-    the box floor; open; retreat upwards.
+    (0.04), the hand turned so the pads close across the spoon's thickness; down until the pinch
+    point is ``grasp_depth`` below that end (the 30 mm pads then cover the top 27 mm: the 9 mm
+    handle or the 36 mm wide end of the bowl); close fully (20 N; RMB's pre-motion closes to
+    0.01, which squeezes a 4.8 mm spoon with the same force); lift until the spoon's lower end
+    clears the start box's walls; carry it over the goal box; lower it until its lower end is
+    just above the box floor; open; retreat upwards.
 
     The spoon hangs from the pads as it was held (it may lean a few degrees), so the carry and
     the lowering aim its measured middle at the box centre and its measured lower end at the

@@ -33,6 +33,7 @@ from rmb_lerobot.pointcloud import opencv_camera_pose
 if TYPE_CHECKING:
     from rmb_lerobot.envs.tasks.base import Task
 
+
 class MujocoBackend(Backend, SceneState):
     """One MuJoCo world: the robot record's model, the workspace and the task's props.
 

@@ -104,8 +104,7 @@ class Task(ABC):
         """Nominal shift of world ``world_idx`` plus an optional uniform random shift."""
         if not 0 <= int(world_idx) < self.num_worlds or int(world_idx) != world_idx:
             raise ValueError(
-                f"world_idx must be an integer in 0..{self.num_worlds - 1}, "
-                f"got {world_idx!r}"
+                f"world_idx must be an integer in 0..{self.num_worlds - 1}, got {world_idx!r}"
             )
         if random_shift < 0:
             raise ValueError(f"random_shift must be >= 0 metres, got {random_shift!r}")

@@ -219,3 +219,16 @@ def test_importing_the_core_loads_no_simulator():
         "assert 'MUJOCO_GL' not in os.environ, os.environ['MUJOCO_GL']\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
+
+
+def test_a_missing_simulator_names_its_extra(monkeypatch):
+    import importlib.util
+
+    from rmb_lerobot.envs.simulators import SIMULATORS
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "pybullet" else real(name)
+    )
+    with pytest.raises(ImportError, match=r"pip install 'lerobot_env_rmb\[pybullet\]'"):
+        SIMULATORS["pybullet"].backend_class()

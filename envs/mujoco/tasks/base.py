@@ -27,6 +27,7 @@ if TYPE_CHECKING:
 
     from rmb_lerobot.envs.mujoco.backend import MujocoBackend
 
+
 class MujocoTaskScene[T: Task]:
     """The MuJoCo construction of one task (``self.task``: its neutral record and constants)."""
 

@@ -16,6 +16,7 @@ The spoon and the three boxes are seen by the fingertip sensors, as in RMB.
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -82,7 +83,7 @@ def spoon_boxes() -> list[Box]:
     handle = []
     joints = (0.03, 0.085, 0.14, HANDLE_END)
     taper = (HANDLE_WIDTH_AT_BOWL - HANDLE_WIDTH_AT_TIP) / (HANDLE_END - BOWL_HALF_LENGTH)
-    for start, end in zip(joints[:-1], joints[1:], strict=True):
+    for start, end in pairwise(joints):
         centre = (start + end) / 2
         width = HANDLE_WIDTH_AT_BOWL - taper * max(centre - BOWL_HALF_LENGTH, 0.0)
         handle.append(((width / 2, (end - start) / 2, HANDLE_THICKNESS / 2), (0.0, centre, mid)))

@@ -25,7 +25,7 @@ from rmb_lerobot.envs.pybullet.camera import (
 from rmb_lerobot.envs.pybullet.client import PybulletClient, connect, egl_unavailable_reason
 from rmb_lerobot.pointcloud import depth_to_points, transform_points
 
-W, H = 160, 120  # small, so each render takes milliseconds; odd-free centre at (60, 80) + 0.5
+W, H = 160, 120  # small, so each render takes milliseconds; centre pixel (row 60, col 80)
 HALF = 0.05  # cube half-extent, metres
 CUBE_CENTRE = FRONT_CAMERA.target  # (0.5, 0, 0.05): the cube rests on the plane
 
@@ -38,14 +38,12 @@ def _build_scene(client: PybulletClient) -> int:
     return client.createMultiBody(0.0, box, visual, basePosition=CUBE_CENTRE)
 
 
-def _renderers() -> list:
-    reason = egl_unavailable_reason()
-    egl = pytest.param("egl", marks=pytest.mark.skipif(reason is not None, reason=f"{reason}"))
-    return ["tiny", egl]
-
-
-@pytest.fixture(scope="module", params=_renderers())
+@pytest.fixture(scope="module", params=["tiny", "egl"])
 def scene(request: pytest.FixtureRequest) -> Iterator[tuple[PybulletClient, int]]:
+    """One client per renderer with the plane and cube; the EGL one is skipped, with the
+    reason, where EGL cannot load (checked only when an EGL test runs)."""
+    if request.param == "egl" and (reason := egl_unavailable_reason()) is not None:
+        pytest.skip(f"EGL unavailable: {reason}")
     with connect(renderer=request.param) as client:
         assert client.renderer == request.param
         yield client, _build_scene(client)
