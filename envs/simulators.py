@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.backend import Backend
     from rmb_lerobot.envs.robots import Robot
+    from rmb_lerobot.envs.tasks.base import Task
 
 
 def load_target(target: str) -> Any:
@@ -108,6 +110,22 @@ def simulator_for(name: str) -> Simulator:
         return SIMULATORS[name]
     except KeyError:
         raise ValueError(f"unknown simulator {name!r}; known: {sorted(SIMULATORS)}") from None
+
+
+def scene_builder_for(table: Mapping[str, str], task: Task, simulator: str) -> Any:
+    """A task's scene builder from a simulator's table (task name -> ``"module:Class"``),
+    made with the task.
+
+    Raises:
+        ValueError: the table has no scene for this task (the error names the ones it has).
+    """
+    target = table.get(task.name)
+    if target is None:
+        raise ValueError(
+            f"task {task.name!r} has no {simulator} scene; {simulator} builds: "
+            f"{', '.join(sorted(table))}"
+        )
+    return load_target(target)(task)
 
 
 def _camel(name: str) -> str:

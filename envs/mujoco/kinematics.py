@@ -8,11 +8,12 @@ every iteration; it is what the end-effector action modes and the scripted exper
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Protocol
 
 import mujoco
 import numpy as np
+
+from rmb_lerobot.envs.ik import IkResult, solve_dls
 
 
 class ArmNames(Protocol):
@@ -22,17 +23,6 @@ class ArmNames(Protocol):
     arm_joints: tuple[str, ...]
     root_body: str
     eef_site: str
-
-
-@dataclass(frozen=True)
-class IkResult:
-    """Joint solution (arm joints only) and how far its site pose is from the target."""
-
-    qpos: np.ndarray
-    converged: bool
-    pos_error: float
-    rot_error: float
-    iterations: int
 
 
 def _quat_of(xmat: np.ndarray) -> np.ndarray:
@@ -137,37 +127,33 @@ class ArmKinematics:
         """
         site_id = self._site_id(site)
         target_pos, target_quat = self.root_to_world(target_pose)
-        q = np.clip(
-            np.asarray(q_init, dtype=np.float64)[: len(self.qpos_index)], self.lower, self.upper
-        )
         jacp = np.zeros((3, self.model.nv))
         jacr = np.zeros((3, self.model.nv))
         site_quat = np.empty(4)
         err_quat = np.empty(4)
-        eye = np.eye(6) * damping**2
-        best = (np.inf, q.copy(), np.inf, np.inf)
-        for iteration in range(max_iters + 1):
+
+        def error(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             self._set_arm(q)
-            pos_err = target_pos - self._data.site_xpos[site_id]
             mujoco.mju_mat2Quat(site_quat, self._data.site_xmat[site_id])
             mujoco.mju_negQuat(site_quat, site_quat)
             mujoco.mju_mulQuat(err_quat, target_quat, site_quat)
-            rot_err = _rotvec(err_quat)
-            p_norm, r_norm = float(np.linalg.norm(pos_err)), float(np.linalg.norm(rot_err))
-            if p_norm + 0.1 * r_norm < best[0]:
-                best = (p_norm + 0.1 * r_norm, q.copy(), p_norm, r_norm)
-            if p_norm < pos_tol and r_norm < rot_tol:
-                return IkResult(q.copy(), True, p_norm, r_norm, iteration)
-            if iteration == max_iters:
-                break
+            return target_pos - self._data.site_xpos[site_id], _rotvec(err_quat)
+
+        def jacobian(q: np.ndarray) -> np.ndarray:  # at the state error(q) set
             mujoco.mj_comPos(self.model, self._data)
             mujoco.mj_jacSite(self.model, self._data, jacp, jacr, site_id)
-            jac = np.vstack([jacp[:, self.dof_index], jacr[:, self.dof_index]])
-            err = np.concatenate([pos_err, rot_err])
-            dq = jac.T @ np.linalg.solve(jac @ jac.T + eye, err)
-            step = np.max(np.abs(dq))
-            if step > max_step:
-                dq *= max_step / step
-            q = np.clip(q + dq, self.lower, self.upper)
-        _, q_best, p_best, r_best = best
-        return IkResult(q_best, False, p_best, r_best, max_iters)
+            return np.vstack([jacp[:, self.dof_index], jacr[:, self.dof_index]])
+
+        q_init = np.asarray(q_init, dtype=np.float64)[: len(self.qpos_index)]
+        return solve_dls(
+            error,
+            jacobian,
+            q_init,
+            self.lower,
+            self.upper,
+            max_iters=max_iters,
+            pos_tol=pos_tol,
+            rot_tol=rot_tol,
+            damping=damping,
+            max_step=max_step,
+        )

@@ -24,13 +24,13 @@ at the origin), so calling them never disturbs a simulation.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pybullet as p
 from scipy.spatial.transform import Rotation
 
+from rmb_lerobot.envs.ik import IkResult, solve_dls
 from rmb_lerobot.envs.pybullet.sawyer import (
     ARM_JOINT_NAMES,
     BASE_INERTIAL_XYZ,
@@ -91,17 +91,6 @@ def to_rmb_record_frame(pose_in_root: Sequence[float]) -> np.ndarray:
     frame_pos, frame_rot = pos_rot_from_pose(RMB_TACTO_RECORD_FRAME)
     pos, rot = pos_rot_from_pose(pose_in_root)
     return pose_from_pos_rot(frame_pos + frame_rot @ pos, frame_rot @ rot)
-
-
-@dataclass(frozen=True)
-class IkResult:
-    """An IK answer: arm joints, whether it met the tolerances, and its remaining error."""
-
-    qpos: np.ndarray
-    converged: bool
-    pos_error: float
-    rot_error: float
-    iterations: int
 
 
 class SawyerKinematics:
@@ -279,31 +268,24 @@ class SawyerKinematics:
             ValueError: If ``target_pose`` is not a 7-vector with a non-zero quaternion.
         """
         target_pos, target_rot = pos_rot_from_pose(target_pose)
-        q = np.clip(self._arm_qpos(q_init), self.lower, self.upper)
-        regulariser = np.eye(6) * damping**2
-        best = (np.inf, q.copy(), np.inf, np.inf)
-        for iteration in range(max_iters + 1):
+
+        def error(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             self._set_arm(q)
             pos, rot = self._eef_pos_rot()
-            pos_err = target_pos - pos
-            rot_err = Rotation.from_matrix(target_rot @ rot.T).as_rotvec()
-            p_norm, r_norm = float(np.linalg.norm(pos_err)), float(np.linalg.norm(rot_err))
-            if p_norm + 0.1 * r_norm < best[0]:
-                best = (p_norm + 0.1 * r_norm, q.copy(), p_norm, r_norm)
-            if p_norm < pos_tol and r_norm < rot_tol:
-                return IkResult(q.copy(), True, p_norm, r_norm, iteration)
-            if iteration == max_iters:
-                break
-            jac = self.jacobian(q)
-            dq = jac.T @ np.linalg.solve(
-                jac @ jac.T + regulariser, np.concatenate([pos_err, rot_err])
-            )
-            largest = float(np.max(np.abs(dq)))
-            if largest > max_step:
-                dq *= max_step / largest
-            q = np.clip(q + dq, self.lower, self.upper)
-        _, q_best, p_best, r_best = best
-        return IkResult(q_best, False, p_best, r_best, max_iters)
+            return target_pos - pos, Rotation.from_matrix(target_rot @ rot.T).as_rotvec()
+
+        return solve_dls(
+            error,
+            self.jacobian,
+            self._arm_qpos(q_init),
+            self.lower,
+            self.upper,
+            max_iters=max_iters,
+            pos_tol=pos_tol,
+            rot_tol=rot_tol,
+            damping=damping,
+            max_step=max_step,
+        )
 
     def ik(self, target_pose: Sequence[float], q_init: Sequence[float]) -> np.ndarray:
         """Arm joints (7,) placing the eef at ``target_pose`` (root frame), from ``q_init``.

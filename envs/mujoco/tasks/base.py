@@ -15,11 +15,11 @@ a MuJoCo task adds one row here, never an edit of the backend or the neutral tas
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rmb_lerobot.envs.simulators import scene_builder_for
 from rmb_lerobot.envs.tasks.base import Task
 
 if TYPE_CHECKING:
@@ -66,16 +66,9 @@ MUJOCO_TASK_SCENES: dict[str, str] = {
 
 
 def mujoco_scene_for(task: Task) -> MujocoTaskScene:
-    """The MuJoCo scene builder of ``task``.
+    """The MuJoCo scene builder of ``task`` (see ``scene_builder_for``).
 
     Raises:
         ValueError: MuJoCo has no scene for this task (the error names the ones it has).
     """
-    target = MUJOCO_TASK_SCENES.get(task.name)
-    if target is None:
-        raise ValueError(
-            f"task {task.name!r} has no MuJoCo scene; MuJoCo builds: "
-            f"{', '.join(sorted(MUJOCO_TASK_SCENES))}"
-        )
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)(task)
+    return scene_builder_for(MUJOCO_TASK_SCENES, task, "MuJoCo")

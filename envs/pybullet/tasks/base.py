@@ -11,13 +11,13 @@ shapes in code (:func:`add_box`): no model file is copied from another repositor
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pybullet as p
 
+from rmb_lerobot.envs.simulators import scene_builder_for
 from rmb_lerobot.envs.tasks.base import Task
 
 if TYPE_CHECKING:
@@ -112,16 +112,9 @@ PYBULLET_TASK_SCENES: dict[str, str] = {
 
 
 def pybullet_scene_for(task: Task) -> PybulletTaskScene:
-    """The PyBullet scene builder of ``task``.
+    """The PyBullet scene builder of ``task`` (see ``scene_builder_for``).
 
     Raises:
         ValueError: PyBullet has no scene for this task (the error names the ones it has).
     """
-    target = PYBULLET_TASK_SCENES.get(task.name)
-    if target is None:
-        raise ValueError(
-            f"task {task.name!r} has no PyBullet scene; PyBullet builds: "
-            f"{', '.join(sorted(PYBULLET_TASK_SCENES))}"
-        )
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)(task)
+    return scene_builder_for(PYBULLET_TASK_SCENES, task, "PyBullet")

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pybullet as p
 from scipy.spatial.transform import Rotation
 
 from rmb_lerobot.envs.pybullet.tasks.base import PybulletTaskScene, add_box, add_compound
@@ -78,6 +79,7 @@ class InsertScene(PybulletTaskScene[TactoInsertTask]):
     def apply_world(self, sim: PybulletBackend, offset: np.ndarray) -> None:
         """The board at RMB's offset and pitch of the world, the blocks at theirs; the env's
         random shift (``offset`` minus the world's own) moves all three together."""
+        self._forget_contacts(sim)
         world = self.task.world_idx
         shift = offset - self.task.world_offsets[world]
         pitch = Rotation.from_euler("y", self.task.board_pitch(world))
@@ -87,3 +89,18 @@ class InsertScene(PybulletTaskScene[TactoInsertTask]):
             (CUBE1, CUBE2), self.task.cube_nominal_pos, self.task.cube_offsets(world), strict=True
         ):
             sim.reset_body(name, nominal + cube_offset + shift)
+
+    @staticmethod
+    def _forget_contacts(sim: PybulletBackend) -> None:
+        """Drop the contacts the board and blocks kept from the last episode.
+
+        Bullet keeps a contact manifold (with its points' last impulses, which warm-start the
+        solver) for every pair of bodies whose bounding boxes overlap, across teleports. The
+        board starts pressed against a block, so an episode following one that ended in the
+        same world warm-started from the old contacts: the same seed gave joint readings
+        1e-4 rad apart (measured). Moving the three bodies apart and running the broadphase
+        once deletes those pairs, so every episode starts from no contacts.
+        """
+        for k, name in enumerate((BOARD, CUBE1, CUBE2)):
+            sim.reset_body(name, (10.0 * (k + 1), 10.0, 10.0))
+        p.performCollisionDetection(physicsClientId=sim.client_id)
