@@ -41,12 +41,22 @@ def _align_to_vertical(axis: np.ndarray) -> Rotation:
 class TactoInsertExpert(GripperExpert):
     """Tool point: the pinch point between the pads, which squeeze the board's 30 mm width.
 
-    Phases: the hand turned about world y by the board's pitch (fingers along the board) above
-    a point ``grasp_below_top`` below the board's top end, down along the board to it, close,
-    pull the board out along its own axis (it slides off the block it leans on), up to the
-    carry height, turn the hand back to top-down so the board hangs vertical (the turn is about
-    the grasp axis, so the board turns with the hand), over the slot, align the board's measured
-    lower end and axis over the slot centre, lower it in until the success test holds.
+    Phases: the hand above a point ``grasp_below_top`` below the board's top end (on its axis),
+    turned about world y (the grasp axis) by the board's pitch where that is positive (fingers
+    along the board), down along the fingers to it, close, pull the board out along its own
+    axis (it slides off the block it leans on), up to ``carry_z``, turn the hand about the grasp
+    axis by the board's measured lean so the board hangs vertical, over the slot, align the
+    board's measured lower end and axis over the slot centre, lower it in until the success
+    test holds.
+
+    Why not follow a negative pitch too (worlds 3 and 4, the board's top leaning towards the
+    robot): a hand pointing away from the robot straightens the Sawyer's wrist (``right_j5``
+    within 0.02 rad of 0 from -20 deg on, 0.27 at -10, 0.53 top-down: the arm's IK followed
+    from home to the board), where the damped IK let ``right_j4`` / ``right_j6`` wind up until
+    ``right_j4`` hit its limit and the hand could not turn back (world 3 stuck, world 4 knocked
+    the board over). There the hand grasps top-down, at up to 40 deg to the board, and stands
+    it up by pointing back towards the robot (``right_j5`` grows: the comfortable side); the
+    fingers then stay 14.5 mm clear of the box (16.4 mm top-down; measured, worlds 0-4).
     """
 
     grasp_below_top = 0.04  # pinch point below the board's top end, along the board (m)
@@ -68,8 +78,7 @@ class TactoInsertExpert(GripperExpert):
         axis = board_rot[:, 2] if board_rot[2, 2] > 0 else -board_rot[:, 2]
         pitch = float(np.arctan2(axis[0], axis[2]))
         self._grasp_rot = Rotation.from_euler("y", max(pitch, 0.0)) * self._top_down
-        self._stand_rot = self._top_down
-        self._aligned = 0
+        self._stand_rot = self._top_down  # until the board's lean in the grasp is measured
 
     # ------------------------------------------------------------------ board geometry
     def _board_axis(self) -> tuple[np.ndarray, np.ndarray]:

@@ -43,9 +43,15 @@ def make_env():
 
 
 def _assert_not_diverged(env: RmbEnv) -> None:
-    """The state is finite and MuJoCo did not hit a divergent acceleration on the way: MuJoCo
-    then resets the state itself (finite again, the divergence hidden) and only counts it in
-    ``data.warning``, which ``env.reset`` clears."""
+    """The state is finite and, in MuJoCo, did not hit a divergent acceleration on the way:
+    MuJoCo then resets the state itself (finite again, the divergence hidden) and only counts
+    it in ``data.warning``, which ``env.reset`` clears. Other backends: the measured joint
+    state is finite."""
+    assert np.all(np.isfinite(env.measured_joint_pos())) and np.all(
+        np.isfinite(env.measured_joint_vel())
+    )
+    if env.simulator != "mujoco":
+        return
     assert np.all(np.isfinite(env.sim.data.qpos)) and np.all(np.isfinite(env.sim.data.qvel))
     diverged = env.sim.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
     assert diverged == 0, f"MuJoCo reset a divergent state {diverged} time(s)"
@@ -53,7 +59,7 @@ def _assert_not_diverged(env: RmbEnv) -> None:
 
 def _run_expert(env: RmbEnv, expert_class: type, episode: int, **options) -> dict:
     expert = expert_class(env)
-    options = {"world_idx": episode % 6, "random_shift": 0.03, **options}
+    options = {"world_idx": episode % env.task.num_worlds, "random_shift": 0.03, **options}
     obs, _ = env.reset(seed=episode, options=options)
     expert.reset()
     info = {}
@@ -68,7 +74,7 @@ def _run_expert(env: RmbEnv, expert_class: type, episode: int, **options) -> dic
 @pytest.fixture
 def run_expert():
     """``run_expert(env, ExpertClass, episode, **options) -> info``: one expert episode as the
-    benchmarks run it (seed ``episode``, world ``episode % 6``, 3 cm random shift; ``options``
+    benchmarks run it (seed ``episode``, world ``episode % num_worlds``, 3 cm random shift; ``options``
     add or override reset options), until the task ends; returns the last step's info."""
     return _run_expert
 

@@ -68,6 +68,8 @@ class InsertScene(PybulletTaskScene[TactoInsertTask]):
 
     def build(self, sim: PybulletBackend) -> None:
         cid = sim.client_id
+        # Contacts are solved in sorted pair order (PhysicsSettings); with _forget_contacts an
+        # episode is independent of the ones before it.
         board = add_box(
             cid, BOARD_HALF_SIZE, self.task.board_nominal_pos, mass=BOARD_MASS, rgba=GREEN
         )
@@ -98,8 +100,9 @@ class InsertScene(PybulletTaskScene[TactoInsertTask]):
         solver) for every pair of bodies whose bounding boxes overlap, across teleports. The
         board starts pressed against a block, so an episode following one that ended in the
         same world warm-started from the old contacts: the same seed gave joint readings
-        1e-4 rad apart (measured). Moving the three bodies apart and running the broadphase
-        once deletes those pairs, so every episode starts from no contacts.
+        1e-4 rad apart (measured; with the pairs also unsorted, 7e-6 rad after a reset without
+        steps). Moving the three bodies apart and running the broadphase once deletes those
+        pairs, so every episode starts from no contacts.
         """
         for k, name in enumerate((BOARD, CUBE1, CUBE2)):
             sim.reset_body(name, (10.0 * (k + 1), 10.0, 10.0))
