@@ -1,8 +1,8 @@
 """Picture of RMB's TACTO Grasp: the front camera and both DIGIT images through a grasp.
 
-Runs the scripted expert in ``TactoSawyerGrasp`` and tiles, at four moments (approach, the
-pads closing on the box, squeezed, lifted), the front camera above the left and right
-fingertip tactile images, labelled::
+Runs the scripted expert in ``TactoSawyerGrasp`` and tiles, at four moments (start, the pads
+closing on the box, squeezed as the lift begins, lifted), the front camera above the left and
+right fingertip tactile images, labelled::
 
     .venv/bin/python examples/tactile_grasp_figure.py [--out docs/images/tactile_grasp.png]
 
@@ -24,7 +24,8 @@ SENSORS = ("tactile_left", "tactile_right")
 
 
 def record_moments(size: tuple[int, int], seed: int = 0) -> list[tuple[str, dict[str, np.ndarray]]]:
-    """The expert's grasp; frames at the start, first contact, full squeeze and after lifting."""
+    """The expert's grasp: frames at the start, as the pads reach the box, once squeezed (the
+    lift begins) and when the box is held up (success)."""
     entry = ENVS["pybullet_sawyer_grasp"]
     env = entry.make(cameras=("front", *SENSORS), image_size=size)
     try:
@@ -32,17 +33,14 @@ def record_moments(size: tuple[int, int], seed: int = 0) -> list[tuple[str, dict
         obs, _ = env.reset(seed=seed)
         expert.reset()
         moments = [("start", obs["pixels"])]
-        reference = obs["pixels"]["tactile_left"].astype(float)
-        touched = squeezed = None
+        seen = {"start"}
         for step in range(env.task.max_episode_steps):
             obs, _, terminated, _, _ = env.step(expert(obs))
-            change = np.abs(obs["pixels"]["tactile_left"].astype(float) - reference).mean()
-            if touched is None and change > 3.0:
-                touched = step
-                moments.append((f"contact (step {step})", obs["pixels"]))
-            if touched is not None and squeezed is None and step >= touched + 10:
-                squeezed = step
-                moments.append((f"squeezed (step {step})", obs["pixels"]))
+            phase = expert.phase.value
+            label = {"close": "closing", "lift": "squeezed, lifting"}.get(phase)
+            if label is not None and label not in seen:
+                seen.add(label)
+                moments.append((f"{label} (step {step})", obs["pixels"]))
             if terminated:
                 moments.append((f"lifted (step {step}, success)", obs["pixels"]))
                 break
