@@ -74,8 +74,9 @@ def _run_expert(env: RmbEnv, expert_class: type, episode: int, **options) -> dic
 @pytest.fixture
 def run_expert():
     """``run_expert(env, ExpertClass, episode, **options) -> info``: one expert episode as the
-    benchmarks run it (seed ``episode``, world ``episode % num_worlds``, 3 cm random shift; ``options``
-    add or override reset options), until the task ends; returns the last step's info."""
+    benchmarks run it (seed ``episode``, world ``episode % num_worlds``, 3 cm random shift;
+    ``options`` add or override reset options), until the task ends; returns the last step's
+    info."""
     return _run_expert
 
 
