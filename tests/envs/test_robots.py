@@ -84,5 +84,23 @@ def test_inconsistent_records_are_refused_with_the_reason():
         Gripper(joints=("f",), open=1.0, closed=1.0, measured_scale=1.0)
     with pytest.raises(ValueError, match=r"home pose \(0.0,\) has 1 values, expected 6"):
         UR5E.home_command(((0.0,),))
-    with pytest.raises(ValueError, match="unknown robot 'kuka'; known: panda, ur5e, ur5e_dual"):
+    with pytest.raises(ValueError, match="unknown robot 'kuka'; known: panda, sawyer, ur5e, "):
         robot_for("kuka")
+    with pytest.raises(ValueError, match=r"joint_signs must be one \+1 or -1 per joint"):
+        Gripper(joints=("l", "r"), open=0.05, closed=0.0, measured_scale=1.0, joint_signs=(1.0,))
+
+
+def test_opposed_fingers_count_with_their_signs():
+    """The WSG50's fingers move to (-g, +g): with the record's signs both count towards g."""
+    from rmb_lerobot.envs.robots import SAWYER
+
+    gripper = SAWYER.arms[0].gripper
+    assert gripper.signs == (-1.0, 1.0)
+    positions = (-0.03, 0.03)
+    measured = (
+        gripper.measured_scale
+        * sum(s * q for s, q in zip(gripper.signs, positions, strict=True))
+        / len(positions)
+    )
+    assert measured == pytest.approx(0.03)
+    assert SAWYER.tactile_sensors == ("tactile_left", "tactile_right")
