@@ -22,7 +22,13 @@ import numpy as np
 import pybullet as p
 
 from rmb_lerobot.envs.backend import Backend
-from rmb_lerobot.envs.pybullet.camera import CameraSpec, opencv_pose, render
+from rmb_lerobot.envs.pybullet.camera import (
+    FRONT_CAMERA,
+    SPOON_FRONT_CAMERA,
+    CameraSpec,
+    opencv_pose,
+    render,
+)
 from rmb_lerobot.envs.pybullet.client import PhysicsSettings, connect
 from rmb_lerobot.envs.pybullet.kinematics import SawyerKinematics, quat_xyzw_to_wxyz
 from rmb_lerobot.envs.pybullet.options import PybulletOptions
@@ -45,15 +51,11 @@ from rmb_lerobot.envs.workspace import Workspace
 if TYPE_CHECKING:
     from rmb_lerobot.envs.tasks.base import Task
 
-# RMB's cameras of each TACTO scene, as PyBullet's orbit parameters (TactoSawyerEnvBase.py:
-# 231-239; Spoon: TactoSawyerSpoonEnv.py:32-38). The workspace records name the same cameras.
+# RMB's cameras of each TACTO scene, as PyBullet's orbit parameters; the workspace records name
+# the same cameras (checked in tests/envs/pybullet/test_backend.py).
 CAMERAS: dict[str, tuple[CameraSpec, ...]] = {
-    "tacto_floor": (
-        CameraSpec("front", target=(0.5, 0.0, 0.05), distance=0.4, yaw=90.0, pitch=-30.0),
-    ),
-    "tacto_spoon_floor": (
-        CameraSpec("front", target=(0.8, 0.0, 0.05), distance=1.0, yaw=90.0, pitch=-30.0),
-    ),
+    "tacto_floor": (FRONT_CAMERA,),
+    "tacto_spoon_floor": (SPOON_FRONT_CAMERA,),
 }
 """Workspace name -> its cameras for PyBullet."""
 
