@@ -104,6 +104,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                     f"--cameras {' '.join(unknown)}: not a camera of {entry.rmb_env_name}; "
                     f"its cameras are {' '.join(entry.cameras)}"
                 )
+            if args.tactile and entry.simulator != "mujoco":
+                raise ValueError(
+                    f"--tactile records MuJoCo's fingertip grids; {entry.rmb_env_name} records "
+                    f"its tactile images as cameras ({' '.join(entry.robot_record.tactile_sensors)}"
+                    ", in --cameras, recorded by default)"
+                )
+            if args.tactile_size is not None and not entry.robot_record.tactile_sensors:
+                raise ValueError(f"--tactile-size: {entry.rmb_env_name} has no tactile images")
             if args.episodes < 1 or args.workers < 1:
                 raise ValueError("--episodes and --workers must be >= 1")
             worlds = entry.num_worlds

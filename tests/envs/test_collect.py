@@ -55,6 +55,18 @@ def test_camera_choices_come_from_the_env(tmp_path, capsys):
     assert "its cameras are front left right hand" in err
 
 
+def test_tactile_flags_say_which_envs_they_fit(tmp_path, capsys):
+    """--tactile is MuJoCo's fingertip grid; the TACTO envs record tactile images as cameras,
+    sized by --tactile-size, which an env without them refuses."""
+    code = main(["TactoSawyerGrasp", "--episodes", "1", "--out", str(tmp_path), "--tactile"])
+    assert code == 2 and not list(tmp_path.iterdir())
+    assert "records its tactile images as cameras (tactile_left tactile_right" in (
+        capsys.readouterr().err
+    )
+    code = main(["insert", "--episodes", "1", "--out", str(tmp_path), "--tactile-size", "8", "8"])
+    assert code == 2 and "MujocoUR5eInsert has no tactile images" in capsys.readouterr().err
+
+
 def test_parallel_workers_and_single_file_format(tmp_path):
     config = CollectConfig("door", tmp_path, episodes=2, fmt="hdf5", cameras=(), depth=False)
     results = sorted(collect(config, workers=2), key=lambda r: r.index)
