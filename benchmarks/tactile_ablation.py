@@ -23,7 +23,7 @@ import sys
 import time
 from pathlib import Path
 
-from rmb_lerobot.cli.quickstart import ACT_CPU_ARGS, Stage, _list
+from rmb_lerobot.cli.quickstart import Stage, _list, act_train_stage
 from rmb_lerobot.envs.registry import entry_for
 
 TACTILE = ("tactile_left", "tactile_right")
@@ -103,26 +103,16 @@ def main() -> int:
             )
         )
         trains.append(
-            Stage(
-                "lerobot-train",
-                [
-                    f"--dataset.repo_id={repo_id}",
-                    f"--dataset.root={out / 'dataset'}",
-                    "--policy.type=act",
-                    *ACT_CPU_ARGS,
-                    "--policy.device=cpu",
-                    "--policy.push_to_hub=false",
-                    *env_args,
-                    "--env_eval_freq=0",
-                    f"--steps={args.steps}",
-                    f"--batch_size={args.batch_size}",
-                    f"--save_freq={args.steps}",
-                    f"--log_freq={max(1, args.steps // 10)}",
-                    "--num_workers=0",
-                    f"--seed={args.seed}",
-                    f"--output_dir={out / 'train'}",
-                    "--wandb.enable=false",
-                ],
+            act_train_stage(
+                repo_id,
+                out / "dataset",
+                env_args,
+                out / "train",
+                steps=args.steps,
+                batch_size=args.batch_size,
+                seed=args.seed,
+                log_every=max(1, args.steps // 10),
+                num_workers=0,
             )
         )
         evals.append(

@@ -73,6 +73,58 @@ def _list(values: Sequence[str]) -> str:
     return "[" + ",".join(values) + "]"
 
 
+def act_train_stage(
+    repo_id: str,
+    dataset: Path,
+    env_args: Sequence[str],
+    out: Path,
+    *,
+    steps: int,
+    batch_size: int,
+    seed: int,
+    log_every: int,
+    num_workers: int,
+) -> Stage:
+    """``lerobot-train`` of LeRobot's ACT with the CPU recipe (:data:`ACT_CPU_ARGS`) on a local
+    dataset, its env type given by ``env_args``, evaluated afterwards by ``lerobot-eval``.
+
+    Args:
+        repo_id: The dataset's id.
+        dataset: The dataset's root.
+        env_args: ``--env.*`` arguments (type, cameras, image size).
+        out: LeRobot's output directory (checkpoints).
+        steps: Training steps (one checkpoint, at the end).
+        batch_size: Samples per step.
+        seed: Training seed.
+        log_every: Steps between log lines.
+        num_workers: Data loader workers.
+
+    Returns:
+        The stage.
+    """
+    return Stage(
+        "lerobot-train",
+        [
+            f"--dataset.repo_id={repo_id}",
+            f"--dataset.root={dataset}",
+            "--policy.type=act",
+            *ACT_CPU_ARGS,
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            *env_args,
+            "--env_eval_freq=0",  # evaluated once afterwards, with lerobot-eval
+            f"--steps={steps}",
+            f"--batch_size={batch_size}",
+            f"--save_freq={steps}",
+            f"--log_freq={log_every}",
+            f"--num_workers={num_workers}",
+            f"--seed={seed}",
+            f"--output_dir={out}",
+            "--wandb.enable=false",
+        ],
+    )
+
+
 def pipeline(args: argparse.Namespace) -> list[Stage]:
     """The four commands of the main job, for the options given."""
     entry = entry_for(args.env)
@@ -113,26 +165,16 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
             "--overwrite",
         ],
     )
-    train = Stage(
-        "lerobot-train",
-        [
-            f"--dataset.repo_id={repo_id}",
-            f"--dataset.root={out / 'dataset'}",
-            "--policy.type=act",
-            *ACT_CPU_ARGS,
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            *env_args,
-            "--env_eval_freq=0",  # evaluated once below, with lerobot-eval
-            f"--steps={args.steps}",
-            f"--batch_size={args.batch_size}",
-            f"--save_freq={args.steps}",
-            f"--log_freq={max(1, args.steps // 20)}",
-            "--num_workers=1",
-            f"--seed={args.seed}",
-            f"--output_dir={out / 'train'}",
-            "--wandb.enable=false",
-        ],
+    train = act_train_stage(
+        repo_id,
+        out / "dataset",
+        env_args,
+        out / "train",
+        steps=args.steps,
+        batch_size=args.batch_size,
+        seed=args.seed,
+        log_every=max(1, args.steps // 20),
+        num_workers=1,
     )
     evaluate = Stage(
         "lerobot-eval",
