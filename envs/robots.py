@@ -18,6 +18,7 @@ simulator, so the env registry and the converters can read robot facts cheaply.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -415,6 +416,34 @@ SAWYER = Robot(
 )
 """RMB's TACTO robot: a Rethink Sawyer with a Weiss WSG50 gripper and a DIGIT tactile sensor on
 each fingertip (PyBullet)."""
+
+
+def mounted(robot: Robot, *positions: tuple[float, float, float]) -> Robot:
+    """The robot with its arms' bases moved, each keeping its orientation.
+
+    Simulators build a robot where its record mounts it, so this is how to stand one on
+    another table or stand.
+
+    Args:
+        robot: The record.
+        *positions: One base position (m, world frame) per arm, in arm order.
+
+    Returns:
+        A copy of the record with those mounts.
+
+    Raises:
+        ValueError: If the number of positions is not the number of arms.
+    """
+    if len(positions) != len(robot.arms):
+        raise ValueError(
+            f"robot {robot.name!r} has {len(robot.arms)} arms, got {len(positions)} mounts"
+        )
+    arms = tuple(
+        dataclasses.replace(arm, mount=Pose(tuple(pos), arm.mount.quat))
+        for arm, pos in zip(robot.arms, positions, strict=True)
+    )
+    return dataclasses.replace(robot, arms=arms)
+
 
 ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (UR5E, UR5E_DUAL, XARM7, PANDA, SAWYER)}
 """Every robot by short name."""

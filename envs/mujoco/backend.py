@@ -21,7 +21,7 @@ from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
 from rmb_lerobot.envs.mujoco.options import MujocoOptions
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer, mujoco
-from rmb_lerobot.envs.mujoco.robots import build_robot_model
+from rmb_lerobot.envs.mujoco.robots import build_robot_model, check_model
 from rmb_lerobot.envs.mujoco.scene import build_scene
 from rmb_lerobot.envs.mujoco.tasks.base import mujoco_scene_for
 from rmb_lerobot.envs.robots import Robot
@@ -78,6 +78,7 @@ class MujocoBackend(Backend, SceneState):
         self.task_scene = mujoco_scene_for(task)
         self.task_scene.build(spec, self)
         self.model = spec.compile()
+        check_model(robot, self.robot_model, self.model)
         self.data = mujoco.MjData(self.model)
         self._tactile = {pad.key: TactileGrid(self.model, pad.site) for pad in pads}
         self.kinematics = tuple(ArmKinematics(self.model, arm) for arm in self.robot_model.arms)

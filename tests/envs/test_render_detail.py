@@ -22,6 +22,7 @@ from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
 from rmb_lerobot.envs.mujoco.robots import build_ur5e
 from rmb_lerobot.envs.mujoco.scene import build_scene
 from rmb_lerobot.envs.registry import compose
+from rmb_lerobot.envs.robots import UR5E
 from rmb_lerobot.envs.tasks.insert import InsertTask
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
@@ -164,7 +165,7 @@ def test_cache_miss_then_hit(tmp_path, monkeypatch):
     monkeypatch.setenv("RMB_LEROBOT_CACHE", str(tmp_path))
     monkeypatch.setattr(meshes, "_memory_cache", {})
     start = time.perf_counter()
-    first = build_scene(build_ur5e(), RMB_TABLE).compile()
+    first = build_scene(build_ur5e(UR5E), RMB_TABLE).compile()
     miss = time.perf_counter() - start
     cached = sorted(p.name for p in (tmp_path / "visual_meshes").iterdir())
     assert len(cached) == 2 and all(name.endswith(".npz") for name in cached)  # arm, gripper
@@ -175,7 +176,7 @@ def test_cache_miss_then_hit(tmp_path, monkeypatch):
     monkeypatch.setattr(meshes, "_memory_cache", {})
     monkeypatch.setattr(meshes, "compute_simplified_meshes", no_recompute)
     start = time.perf_counter()
-    second = build_scene(build_ur5e(), RMB_TABLE).compile()
+    second = build_scene(build_ur5e(UR5E), RMB_TABLE).compile()
     hit = time.perf_counter() - start
     np.testing.assert_array_equal(first.mesh_vert, second.mesh_vert)
     np.testing.assert_array_equal(first.mesh_face, second.mesh_face)
@@ -188,16 +189,16 @@ def test_unwritable_cache_still_builds(tmp_path, monkeypatch):
     blocker.write_text("not a directory")
     monkeypatch.setenv("RMB_LEROBOT_CACHE", str(blocker))
     monkeypatch.setattr(meshes, "_memory_cache", {})
-    model = build_scene(build_ur5e(), RMB_TABLE).compile()
+    model = build_scene(build_ur5e(UR5E), RMB_TABLE).compile()
     assert _visual_faces(model) < 30_000
 
 
 def test_full_detail_leaves_the_spec_untouched():
-    spec = build_scene(build_ur5e(visual_mesh_error=0.0), RMB_TABLE)
+    spec = build_scene(build_ur5e(UR5E, visual_mesh_error=0.0), RMB_TABLE)
     assert all(mesh.file for mesh in spec.meshes)
     assert not any(mesh.name.endswith(meshes.VISUAL_SUFFIX) for mesh in spec.meshes)
     with pytest.raises(ValueError, match="visual_mesh_error"):
-        build_ur5e(visual_mesh_error=-1.0)
+        build_ur5e(UR5E, visual_mesh_error=-1.0)
 
 
 def test_simplify_mesh_keeps_the_surface_within_the_bound():

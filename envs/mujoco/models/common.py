@@ -1,10 +1,10 @@
-"""What every robot model builder shares: the names a robot record needs, and MjSpec edits.
+"""What every robot model builder shares: the MuJoCo names a robot record needs, MjSpec edits.
 
-A builder returns a :class:`RobotModel`: the composed :class:`mujoco.MjSpec` (the root of the
-scene, like :func:`rmb_lerobot.envs.mujoco.robot.build_robot_spec`'s) and one :class:`ArmModel`
-per arm with the names of its joints, actuators, sites, sensors and camera. ``ArmModel`` uses
-:class:`~rmb_lerobot.envs.mujoco.robot.RobotSpec`'s field names where they mean the same, so code
-written against those (e.g. :class:`~rmb_lerobot.envs.mujoco.kinematics.ArmKinematics`) reads it.
+A builder takes the robot's record (:class:`~rmb_lerobot.envs.robots.Robot`) and returns a
+:class:`RobotModel`: the composed :class:`mujoco.MjSpec` (the root of the scene, like
+:func:`rmb_lerobot.envs.mujoco.robot.build_robot_spec`'s) and one :class:`ArmModel` per arm,
+which holds the arm's record and adds only what MuJoCo names (actuators, base body, sensors,
+hand camera).
 """
 
 from __future__ import annotations
@@ -16,12 +16,16 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from rmb_lerobot.envs.mujoco.robot import FORCE_SENSOR, TORQUE_SENSOR
+from rmb_lerobot.envs.robots import Arm
 
 ERD_DISTRIBUTION = "example-robot-data"
 ERD_REQUIREMENT = "example-robot-data>=6.0,<7"
 _ERD_ROBOTS = "cmeel.prefix/share/example-robot-data/robots"
 _ERD_PACKAGE_URL = "package://example-robot-data/robots/"
+
+# Names of the wrist wrench sensors (the UR5e's; every MuJoCo robot here uses them).
+FORCE_SENSOR = "force"
+TORQUE_SENSOR = "torque"
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -29,30 +33,76 @@ Quat = tuple[float, float, float, float]
 
 @dataclass(frozen=True)
 class ArmModel:
-    """Names into a :class:`RobotModel`'s spec for one arm with its gripper.
+    """One arm of a :class:`RobotModel`: its robot record and the names only MuJoCo has.
 
-    The measured gripper value is ``gripper_scale * mean(gripper joint positions)``, in the
-    units of the gripper actuator's command (:meth:`gripper_value`), as RMB computes it.
+    The neutral facts (joints, gripper, home, frames) are the record's (:attr:`record`, an
+    :class:`~rmb_lerobot.envs.robots.Arm`), read through the properties below under
+    :class:`~rmb_lerobot.envs.mujoco.robot.RobotSpec`'s names so that code written against
+    those (e.g. :class:`~rmb_lerobot.envs.mujoco.kinematics.ArmKinematics`) reads it. The
+    fields are what a MuJoCo model adds: actuators, the arm's base body, the wrench sensors and
+    the hand camera's MuJoCo name. :func:`~rmb_lerobot.envs.mujoco.robots.check_model` proves
+    that a compiled model has every name the record gives.
+
+    The measured gripper value is ``measured_scale * mean(sign * gripper joint positions)``, in
+    the units of the gripper actuator's command (:meth:`gripper_value`), as RMB computes it.
     End-effector poses are ``eef_site`` poses in the ``root_body`` frame (RMB's
     ``*_root_frame``); ``tcp_site`` is between the fingertips.
     """
 
-    arm_joints: tuple[str, ...]
+    record: Arm
     arm_actuators: tuple[str, ...]
     gripper_actuator: str
-    gripper_joints: tuple[str, ...]
-    gripper_scale: float
-    gripper_ctrl_range: tuple[float, float]
-    home_arm_qpos: tuple[float, ...]
-    home_gripper: float
-    root_body: str
     base_body: str
-    eef_site: str
-    tcp_site: str
-    ft_site: str
     force_sensor: str
     torque_sensor: str
     hand_camera: str | None
+
+    def __post_init__(self) -> None:
+        if len(self.arm_actuators) != len(self.record.joints):
+            raise ValueError(
+                f"arm {self.record.name!r}: {len(self.record.joints)} joints but "
+                f"{len(self.arm_actuators)} actuators {self.arm_actuators}"
+            )
+
+    @property
+    def arm_joints(self) -> tuple[str, ...]:
+        return self.record.joints
+
+    @property
+    def gripper_joints(self) -> tuple[str, ...]:
+        return self.record.gripper.joints
+
+    @property
+    def gripper_scale(self) -> float:
+        return self.record.gripper.measured_scale
+
+    @property
+    def gripper_ctrl_range(self) -> tuple[float, float]:
+        return self.record.gripper.command_range
+
+    @property
+    def home_arm_qpos(self) -> tuple[float, ...]:
+        return self.record.home
+
+    @property
+    def home_gripper(self) -> float:
+        return self.record.gripper.home_command
+
+    @property
+    def root_body(self) -> str:
+        return self.record.root_frame
+
+    @property
+    def eef_site(self) -> str:
+        return self.record.eef_frame
+
+    @property
+    def tcp_site(self) -> str:
+        return self.record.tcp_frame
+
+    @property
+    def ft_site(self) -> str | None:
+        return self.record.wrench_frame
 
     @property
     def num_arm_joints(self) -> int:
@@ -65,8 +115,10 @@ class ArmModel:
 
     def gripper_value(self, data: mujoco.MjData) -> float:
         """The measured gripper value RMB records for this arm."""
-        return self.gripper_scale * float(
-            np.mean([data.joint(name).qpos[0] for name in self.gripper_joints])
+        gripper = self.record.gripper
+        positions = [data.joint(name).qpos[0] for name in gripper.joints]
+        return gripper.measured_scale * float(
+            np.mean([sign * q for sign, q in zip(gripper.signs, positions, strict=True)])
         )
 
     def set_home(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:

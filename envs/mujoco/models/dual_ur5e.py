@@ -31,71 +31,69 @@ from pathlib import Path
 import mujoco
 
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
-from rmb_lerobot.envs.mujoco.models.common import ArmModel, RobotModel, StandBox, Vec3
-from rmb_lerobot.envs.mujoco.robot import (
+from rmb_lerobot.envs.mujoco.models.common import (
     FORCE_SENSOR,
     TORQUE_SENSOR,
-    UR5E_2F85,
-    build_robot_spec,
+    ArmModel,
+    RobotModel,
+    StandBox,
 )
-from rmb_lerobot.envs.robots import UR5E_DUAL
+from rmb_lerobot.envs.mujoco.robot import UR5E_2F85, build_robot_spec
+from rmb_lerobot.envs.robots import UR5E, Robot
 
-# The record's arms, by name prefix: mounts (y = +-0.4 on one stand) and start poses.
-_ARMS = {f"{arm.name}/": arm for arm in UR5E_DUAL.arms}
-PREFIXES = tuple(_ARMS)
-RMB_MOUNT_POS: dict[str, Vec3] = {prefix: arm.mount.pos for prefix, arm in _ARMS.items()}
 RMB_STAND = StandBox(pos=(-0.605, 0.0, 0.4), half_size=(0.33, 0.66, 0.4))
-HOMES = {prefix: arm.home for prefix, arm in _ARMS.items()}
-
-
-def _arm_names(prefix: str) -> ArmModel:
-    robot = UR5E_2F85
-
-    def p(names):
-        return tuple(prefix + name for name in names)
-
-    return ArmModel(
-        arm_joints=p(robot.arm_joints),
-        arm_actuators=p(robot.arm_actuators),
-        gripper_actuator=prefix + robot.gripper_actuator,
-        gripper_joints=p(robot.gripper_joints),
-        gripper_scale=robot.gripper_scale,
-        gripper_ctrl_range=_ARMS[prefix].gripper.command_range,
-        home_arm_qpos=HOMES[prefix],
-        home_gripper=0.0,
-        root_body=prefix + robot.root_body,
-        base_body=prefix + robot.arm_base_body,
-        eef_site=prefix + robot.eef_site,
-        tcp_site=prefix + robot.tcp_site,
-        ft_site=prefix + robot.ft_site,
-        force_sensor=prefix + FORCE_SENSOR,
-        torque_sensor=prefix + TORQUE_SENSOR,
-        hand_camera=prefix + robot.hand_camera.name,
-    )
 
 
 def build_dual_ur5e(
+    robot: Robot,
     *,
-    mount_pos: dict[str, Vec3] | None = None,
     visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
     mesh_cache: Path | bool | None = True,
 ) -> RobotModel:
-    """Two UR5e + 2F-85 at RMB's mounts (or ``mount_pos[prefix]``); arms ordered left, right."""
-    mounts = {**RMB_MOUNT_POS, **(mount_pos or {})}
+    """Two UR5e + 2F-85, each at its record's mount, under its record's name prefix.
+
+    Args:
+        robot: The dual-arm record (:data:`rmb_lerobot.envs.robots.UR5E_DUAL`: arms ``left``
+            and ``right``, each the single UR5e's arm with ``<name>/`` before every name).
+        visual_mesh_error: Visual mesh simplification bound (m), as
+            :func:`~rmb_lerobot.envs.mujoco.robot.build_robot_spec`.
+        mesh_cache: Where simplified meshes are cached.
+
+    Returns:
+        The model, arms in the record's order, on RMB's 1.32 m stand.
+    """
+    files, single = UR5E_2F85, UR5E.arms[0]
     world = mujoco.MjSpec()
     world.modelname = "dual_ur5e"
     world.compiler.degree = False  # MjSpec() defaults to degrees
     world.compiler.autolimits = True
     world.option.timestep = 0.004
     world.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    for prefix in PREFIXES:
+    arms = []
+    for record in robot.arms:
+        prefix = f"{record.name}/"
+        # One single-arm UR5e, at this arm's mount, attached under the prefix: every name is
+        # the single arm's with the prefix in front, which is how the record spells them.
         arm = build_robot_spec(
-            dataclasses.replace(UR5E_2F85, mount_pos=mounts[prefix]),
+            files,
+            dataclasses.replace(single, mount=record.mount),
             visual_mesh_error=visual_mesh_error,
             mesh_cache=mesh_cache,
         )
         world.option.cone, world.option.impratio = arm.option.cone, arm.option.impratio
         world.attach(arm, prefix=prefix, frame=world.worldbody.add_frame())
-    arms = tuple(_arm_names(prefix) for prefix in PREFIXES)
-    cameras = {arm.hand_camera.replace("/", "_"): arm.hand_camera for arm in arms}
-    return RobotModel("dual_ur5e", world, arms, cameras, stand=RMB_STAND)
+        arms.append(
+            ArmModel(
+                record=record,
+                arm_actuators=tuple(prefix + name for name in files.arm_actuators),
+                gripper_actuator=prefix + files.gripper_actuator,
+                base_body=prefix + files.arm_base_body,
+                force_sensor=prefix + FORCE_SENSOR,
+                torque_sensor=prefix + TORQUE_SENSOR,
+                hand_camera=prefix + single.hand_camera.name if single.hand_camera else None,
+            )
+        )
+    cameras = {
+        arm.hand_camera.replace("/", "_"): arm.hand_camera for arm in arms if arm.hand_camera
+    }
+    return RobotModel("dual_ur5e", world, tuple(arms), cameras, stand=RMB_STAND)

@@ -48,30 +48,18 @@ from rmb_lerobot.envs.mujoco.models.common import (
     ArmModel,
     RobotModel,
     StandBox,
-    Vec3,
     add_arm_servos,
     add_ft_sensor,
     add_servo,
     load_erd_urdf,
     mount,
 )
-from rmb_lerobot.envs.robots import PANDA
+from rmb_lerobot.envs.robots import Robot
 
 URDF = "panda_description/urdf/panda.urdf"
-_ARM = PANDA.arms[0]  # the record: joints, gripper, home, mount, frames
-ROOT_BODY = _ARM.root_frame
 BASE_BODY = "panda_link0"
-HAND_BODY = _ARM.hand_frame
-EEF_SITE = _ARM.eef_frame
-TCP_SITE = _ARM.tcp_frame
-FT_SITE = _ARM.wrench_frame
-JOINTS = _ARM.joints
 ACTUATORS = tuple(f"actuator{i}" for i in range(1, 8))
 GRIPPER_ACTUATOR = "actuator8"
-GRIPPER_JOINTS = _ARM.gripper.joints
-GRIPPER_CTRL_RANGE = (0.0, 1.0)
-HOME = _ARM.home
-RMB_MOUNT_POS: Vec3 = _ARM.mount.pos
 RMB_STAND = StandBox(pos=(-0.5, 0.0, 0.4), half_size=(0.22, 0.22, 0.4))
 # panda_config.xml lines 126-138: (kp, kv, |force|), force as explained in the module docstring.
 _GAINS = ((1000, 20, 100),) * 2 + ((750, 4, 100),) * 2 + ((300, 2, 12),) * 3
@@ -112,59 +100,65 @@ def _fingers(spec: mujoco.MjSpec) -> None:
         eq.solref = [0.005, 1.0]
 
 
-def build_panda(*, mount_pos: Vec3 = RMB_MOUNT_POS) -> RobotModel:
-    """Panda + hand + wrist F/T sensor, base at ``mount_pos`` (RMB's by default)."""
+def build_panda(robot: Robot) -> RobotModel:
+    """Panda + hand + wrist F/T sensor, base at the record's mount.
+
+    Args:
+        robot: The Panda record (:data:`rmb_lerobot.envs.robots.PANDA`): joints (RMB's names),
+            gripper, home, frames and mount.
+
+    Returns:
+        The model, on RMB's stand.
+
+    Raises:
+        ValueError: If the record has no wrench frame (this model has a wrist F/T sensor).
+    """
+    (record,) = robot.arms
+    if record.wrench_frame is None:
+        raise ValueError(f"{robot.name}: the Panda model has a wrist F/T sensor")
+    joints, gripper_joints, hand = record.joints, record.gripper.joints, record.hand_frame
     spec, _ = load_erd_urdf(URDF)
     spec.modelname = "panda"
     spec.option.timestep = 0.004  # env_panda_common.xml line 3
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.autolimits = True
     _rename(spec)
-    for joint, damping in zip(JOINTS, _DAMPING, strict=True):
+    for joint, damping in zip(joints, _DAMPING, strict=True):
         spec.joint(joint).damping = [damping, 0, 0]  # MuJoCo 4: damping is a 3-vector
-    for joint in GRIPPER_JOINTS:
+    for joint in gripper_joints:
         spec.joint(joint).damping = [10, 0, 0]
     for joint in spec.joints:
         joint.armature = 0.1
     for body in spec.bodies:
         for geom in body.geoms:
             if geom.type == mujoco.mjtGeom.mjGEOM_MESH:
-                geom.rgba = list(_OFF_WHITE if body.name == HAND_BODY else _WHITE)
+                geom.rgba = list(_OFF_WHITE if body.name == hand else _WHITE)
     _fingers(spec)
     for geom in spec.geoms:
         if geom.contype or geom.conaffinity:
             geom.contype, geom.conaffinity = ROBOT_CONTYPE, ROBOT_CONAFFINITY
 
-    add_arm_servos(spec, JOINTS, ACTUATORS, _GAINS)
+    add_arm_servos(spec, joints, ACTUATORS, _GAINS)
     add_servo(  # panda_config.xml lines 139-140
         spec,
         GRIPPER_ACTUATOR,
-        GRIPPER_JOINTS[0],
+        gripper_joints[0],
         kp=10.0,
         kv=0.1,
         gear=25.0,
-        ctrl_range=GRIPPER_CTRL_RANGE,
+        ctrl_range=record.gripper.command_range,
         force_range=(-5.0, 5.0),
     )
-    spec.body("panda_link7").add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)
-    spec.body(HAND_BODY).add_site(name=TCP_SITE, pos=[0, 0, 0.1034], size=[0.005, 0, 0], group=4)
-    force, torque = add_ft_sensor(spec, HAND_BODY, FT_SITE)
-    mount(spec, BASE_BODY, ROOT_BODY, mount_pos)
+    spec.body("panda_link7").add_site(name=record.eef_frame, size=[0.005, 0, 0], group=4)
+    spec.body(hand).add_site(name=record.tcp_frame, pos=[0, 0, 0.1034], size=[0.005, 0, 0], group=4)
+    force, torque = add_ft_sensor(spec, hand, record.wrench_frame)
+    mount(spec, BASE_BODY, record.root_frame, record.mount.pos, record.mount.quat)
 
     arm = ArmModel(
-        arm_joints=JOINTS,
+        record=record,
         arm_actuators=ACTUATORS,
         gripper_actuator=GRIPPER_ACTUATOR,
-        gripper_joints=GRIPPER_JOINTS,
-        gripper_scale=_ARM.gripper.measured_scale,
-        gripper_ctrl_range=GRIPPER_CTRL_RANGE,
-        home_arm_qpos=HOME,
-        home_gripper=_ARM.gripper.home_command,
-        root_body=ROOT_BODY,
         base_body=BASE_BODY,
-        eef_site=EEF_SITE,
-        tcp_site=TCP_SITE,
-        ft_site=FT_SITE,
         force_sensor=force,
         torque_sensor=torque,
         hand_camera=None,

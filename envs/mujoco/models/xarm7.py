@@ -32,7 +32,6 @@ from rmb_lerobot.envs.mujoco.models import xarm_gripper
 from rmb_lerobot.envs.mujoco.models.common import (
     ArmModel,
     RobotModel,
-    Vec3,
     add_arm_servos,
     add_ft_sensor,
     add_render_twins,
@@ -40,18 +39,11 @@ from rmb_lerobot.envs.mujoco.models.common import (
     load_erd_urdf,
     mount,
 )
-from rmb_lerobot.envs.robots import XARM7
+from rmb_lerobot.envs.robots import HandCamera, Robot
 
 URDF = "xarm_description/urdf/xarm7.urdf"
-_ARM = XARM7.arms[0]  # the record: joints, home, mount, frames, camera
-ROOT_BODY = _ARM.root_frame
 BASE_BODY = "link_base"
-EEF_SITE = _ARM.eef_frame
-FT_SITE = _ARM.wrench_frame
-JOINTS = _ARM.joints
 ACTUATORS = tuple(f"act{i}" for i in range(1, 8))
-HOME = _ARM.home
-RMB_MOUNT_POS: Vec3 = _ARM.mount.pos
 RMB_TABLE_TOP_Z = 0.74
 # xarm7_config.xml lines 36-46: (kp, kv, |force|) of classes size1 (joints 1-2), size2 (3-5),
 # size3 (6-7); ctrlrange = the joint range (lines 35, 93-97).
@@ -67,7 +59,7 @@ _GRIPPER_MOUNT_QUAT = (0.0, 0.0, 0.0, 1.0)
 _WHITE, _GRAY = (1.0, 1.0, 1.0, 1.0), (0.753, 0.753, 0.753, 1.0)  # xarm7_config.xml lines 7-8
 
 
-def _add_hand_camera(spec: mujoco.MjSpec) -> None:
+def _add_hand_camera(spec: mujoco.MjSpec, camera: HandCamera) -> None:
     """RMB's ``hand_camera_link`` on link7 (xarm7_body.xml lines 104-108). Its D435 + stand
     mesh (RMB's own) is drawn as boxes sized from the collision mesh's extents (measured:
     camera x 0.055..0.080, y -0.0455..0.0455, z 0..0.028; plate z 0..0.003). The visual
@@ -78,24 +70,38 @@ def _add_hand_camera(spec: mujoco.MjSpec) -> None:
     body.add_geom(type=box, size=[0.0125, 0.0455, 0.0115], pos=[0.0675, 0, 0.0115], **visual)
     body.add_geom(type=box, size=[0.051, 0.0375, 0.0015], pos=[0.013, 0, 0.0015], **visual)
     body.add_geom(type=box, size=[0.0125, 0.0455, 0.014], pos=[0.0675, 0, 0.014], group=3)
-    camera = _ARM.hand_camera
     body.add_camera(
         name=camera.name, pos=list(camera.pose.pos), quat=list(camera.pose.quat), fovy=camera.fovy
     )
 
 
 def build_xarm7(
+    robot: Robot,
     *,
-    mount_pos: Vec3 = RMB_MOUNT_POS,
     visual_mesh_error: float = DEFAULT_VISUAL_MESH_ERROR,
     mesh_cache: Path | bool | None = True,
 ) -> RobotModel:
-    """xArm7 + xArm gripper + wrist F/T sensor + ``hand`` camera, base at ``mount_pos``.
+    """xArm7 + xArm gripper + wrist F/T sensor + ``hand`` camera, base at the record's mount.
 
-    RMB stands the arm on its table, 0.22 m behind the table centre: on a table whose top is
-    at ``z``, pass ``(-0.22, 0, z)``. ``visual_mesh_error`` / ``mesh_cache``: as
-    :func:`~rmb_lerobot.envs.mujoco.robot.build_robot_spec`.
+    RMB stands the arm on its table, 0.22 m behind the table centre (the record's mount:
+    :data:`rmb_lerobot.envs.robots.XARM7`); on a table whose top is at ``z``, mount it at
+    ``(-0.22, 0, z)``.
+
+    Args:
+        robot: The xArm7 record: joints, home, gripper, frames, hand camera and mount.
+        visual_mesh_error: Visual mesh simplification bound (m), as
+            :func:`~rmb_lerobot.envs.mujoco.robot.build_robot_spec`.
+        mesh_cache: Where simplified meshes are cached.
+
+    Returns:
+        The model (no stand: RMB puts the arm on its table).
+
+    Raises:
+        ValueError: If the record has no wrench frame or hand camera (this model has both).
     """
+    (record,) = robot.arms
+    if record.wrench_frame is None or record.hand_camera is None:
+        raise ValueError(f"{robot.name}: the xArm7 model has a wrist F/T sensor and a hand camera")
     spec, urdf = load_erd_urdf(URDF)
     spec.modelname = "xarm7"
     # Twins first, always: the simplified-mesh cache is keyed by the URDF, not by spec edits.
@@ -108,35 +114,31 @@ def build_xarm7(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.autolimits = True
 
-    add_arm_servos(spec, JOINTS, ACTUATORS, _GAINS)
-    for joint in JOINTS:
+    add_arm_servos(spec, record.joints, ACTUATORS, _GAINS)
+    for joint in record.joints:
         spec.joint(joint).armature = ARMATURE
-    link7 = spec.body("link7")
-    link7.add_site(name=EEF_SITE, size=[0.005, 0, 0], group=4)  # RMB's IK frame: joint 7's
-    xarm_gripper.add_xarm_gripper(spec, link7, quat=_GRIPPER_MOUNT_QUAT)
-    force, torque = add_ft_sensor(
-        spec, xarm_gripper.ROOT_BODY, FT_SITE, quat=tuple(euler_quat((0.0, 0.0, 1.5708)))
+    link7 = spec.body(record.hand_frame)
+    link7.add_site(name=record.eef_frame, size=[0.005, 0, 0], group=4)  # RMB's IK frame: joint 7's
+    xarm_gripper.add_xarm_gripper(
+        spec, link7, record.gripper, record.tcp_frame, quat=_GRIPPER_MOUNT_QUAT
     )
-    _add_hand_camera(spec)
-    mount(spec, BASE_BODY, ROOT_BODY, mount_pos)
+    force, torque = add_ft_sensor(
+        spec,
+        xarm_gripper.ROOT_BODY,
+        record.wrench_frame,
+        quat=tuple(euler_quat((0.0, 0.0, 1.5708))),
+    )
+    _add_hand_camera(spec, record.hand_camera)
+    mount(spec, BASE_BODY, record.root_frame, record.mount.pos, record.mount.quat)
 
     arm = ArmModel(
-        arm_joints=JOINTS,
+        record=record,
         arm_actuators=ACTUATORS,
         gripper_actuator=xarm_gripper.ACTUATOR,
-        gripper_joints=xarm_gripper.JOINTS,
-        gripper_scale=xarm_gripper.SCALE,
-        gripper_ctrl_range=xarm_gripper.CTRL_RANGE,
-        home_arm_qpos=HOME,
-        home_gripper=0.0,
-        root_body=ROOT_BODY,
         base_body=BASE_BODY,
-        eef_site=EEF_SITE,
-        tcp_site=xarm_gripper.TCP_SITE,
-        ft_site=FT_SITE,
         force_sensor=force,
         torque_sensor=torque,
-        hand_camera=_ARM.hand_camera.name,
+        hand_camera=record.hand_camera.name,
     )
-    camera = _ARM.hand_camera.name
+    camera = record.hand_camera.name
     return RobotModel("xarm7", spec, (arm,), {camera: camera}, stand=None)

@@ -27,16 +27,11 @@ import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.mujoco.models.common import euler_quat
-from rmb_lerobot.envs.robots import XARM7
+from rmb_lerobot.envs.robots import Gripper
 
 ROOT_BODY = "xarm_gripper_base_link"
-_GRIPPER = XARM7.arms[0].gripper  # the record: joints in RMB's order, command, scale
-TCP_SITE = XARM7.arms[0].tcp_frame
 ACTUATOR = "gripper"
 TENDON = "split"
-JOINTS = _GRIPPER.joints  # RMB MujocoXarm7EnvBase._get_obs (lines 103-124)
-CTRL_RANGE = _GRIPPER.command_range
-SCALE = _GRIPPER.measured_scale  # mean(JOINTS) / 0.8 * 255 (RMB _get_obs line 124)
 
 _WHITE, _BLACK, _GRAY = (1.0, 1.0, 1.0, 1.0), (0.149, 0.149, 0.149, 1.0), (0.55, 0.55, 0.55, 1.0)
 # xarm7_config.xml lines 48-56 (classes spring_link, driver, follower); solimp's two trailing
@@ -169,11 +164,29 @@ def _side(spec: mujoco.MjSpec, base: mujoco.MjsBody, side: str, s: float) -> Non
 def add_xarm_gripper(
     spec: mujoco.MjSpec,
     parent: mujoco.MjsBody,
+    gripper: Gripper,
+    tcp_site: str,
     quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0),
 ) -> mujoco.MjsBody:
-    """Build the gripper into ``spec`` under ``parent`` (turned by ``quat``); returns its root
-    body :data:`ROOT_BODY`. Built in place rather than attached from a spec of its own, so its
-    names stay RMB's unprefixed ones."""
+    """Build the gripper into ``spec`` under ``parent``.
+
+    Built in place rather than attached from a spec of its own, so its names stay RMB's
+    unprefixed ones (the record's gripper joints are six of them: RMB's
+    ``MujocoXarm7EnvBase._get_obs``, lines 103-124, measures their mean / 0.8 * 255).
+
+    Args:
+        spec: The arm's spec (radians).
+        parent: The body the gripper is mounted on.
+        gripper: The record's gripper: its command range is the actuator's.
+        tcp_site: The record's tool-centre frame, made a site between the fingertips.
+        quat: The gripper's orientation on ``parent``.
+
+    Returns:
+        The gripper's root body, :data:`ROOT_BODY`.
+
+    Raises:
+        ValueError: If ``spec`` works in degrees.
+    """
     if spec.compiler.degree:
         raise ValueError("add_xarm_gripper needs a spec with compiler.degree = False (radians)")
     base = parent.add_body(name=ROOT_BODY, quat=list(quat))
@@ -195,7 +208,7 @@ def add_xarm_gripper(
         type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.0265, 0.051, 0.049], pos=[-0.0015, 0, 0.054],
         rgba=list(_WHITE),
     )  # fmt: skip
-    base.add_site(name=TCP_SITE, pos=[0, 0, 0.172], size=[0.001, 0, 0], group=4)  # line 101
+    base.add_site(name=tcp_site, pos=[0, 0, 0.172], size=[0.001, 0, 0], group=4)  # line 101
     _side(spec, base, "left", 1.0)
     _side(spec, base, "right", -1.0)
 
@@ -212,6 +225,6 @@ def add_xarm_gripper(
     act.gaintype, act.biastype = mujoco.mjtGain.mjGAIN_FIXED, mujoco.mjtBias.mjBIAS_AFFINE
     act.gainprm[0] = 0.3137255  # xarm7_config.xml lines 99-100
     act.biasprm[0:3] = [0.0, -100.0, -10.0]
-    act.ctrlrange, act.ctrllimited = list(CTRL_RANGE), mujoco.mjtLimited.mjLIMITED_TRUE
+    act.ctrlrange, act.ctrllimited = list(gripper.command_range), mujoco.mjtLimited.mjLIMITED_TRUE
     act.forcerange, act.forcelimited = [-100.0, 100.0], mujoco.mjtLimited.mjLIMITED_TRUE
     return base

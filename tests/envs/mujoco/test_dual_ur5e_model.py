@@ -5,9 +5,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rmb_lerobot.envs.mujoco.models.dual_ur5e import RMB_MOUNT_POS, build_dual_ur5e
+from rmb_lerobot.envs.mujoco.models import dual_ur5e
 from rmb_lerobot.envs.mujoco.robot import UR5E_2F85, build_robot_spec
+from rmb_lerobot.envs.robots import UR5E, UR5E_DUAL
 from rmb_lerobot.envs.workspace import RMB_TABLE
+
+# RMB's mounts (env_ur5e_dual_cable.xml lines 39-44), as the record gives them.
+RMB_MOUNT_POS = {"left/": (-0.605, 0.4, 0.8), "right/": (-0.605, -0.4, 0.8)}
+
+
+def build_dual_ur5e() -> dual_ur5e.RobotModel:
+    """RMB's dual UR5e, from its record."""
+    return dual_ur5e.build_dual_ur5e(UR5E_DUAL)
 
 
 def test_names_are_rmbs_with_prefixes(at_home):
@@ -39,14 +48,14 @@ def test_names_are_rmbs_with_prefixes(at_home):
 
 def test_arms_stand_where_rmbs_do_and_are_the_single_ur5e(at_home):
     robot, model, data = at_home(build_dual_ur5e)
-    single = build_robot_spec(UR5E_2F85).compile()
+    single = build_robot_spec(UR5E_2F85, UR5E.arms[0]).compile()
     for arm, prefix in zip(robot.arms, ("left/", "right/"), strict=True):
         np.testing.assert_allclose(data.body(arm.root_body).xpos, RMB_MOUNT_POS[prefix])
         np.testing.assert_allclose(data.body(arm.base_body).xquat, [1, 0, 0, 0], atol=1e-12)
         for i in range(1, single.nbody):  # same bodies, masses and joints as the single arm
             name = single.body(i).name
             assert model.body(prefix + name).mass[0] == pytest.approx(single.body(i).mass[0])
-        for joint in UR5E_2F85.arm_joints:
+        for joint in UR5E.arms[0].joints:
             np.testing.assert_array_equal(
                 model.joint(prefix + joint).range, single.joint(joint).range
             )

@@ -14,6 +14,7 @@ from rmb_lerobot.envs.mujoco.models import common
 from rmb_lerobot.envs.mujoco.models.panda import build_panda
 from rmb_lerobot.envs.mujoco.models.xarm7 import build_xarm7
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer
+from rmb_lerobot.envs.robots import PANDA, XARM7, mounted
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
 
@@ -71,7 +72,7 @@ def test_missing_example_robot_data_says_what_to_install(monkeypatch):
 
     monkeypatch.setattr(common.importlib.metadata, "distribution", missing)
     with pytest.raises(ModuleNotFoundError, match=r"pip install 'example-robot-data>=6.0,<7'"):
-        build_panda()
+        build_panda(PANDA)
 
 
 def test_render_twins_need_explicit_inertials():
@@ -88,7 +89,7 @@ def test_render_twins_need_explicit_inertials():
 
 
 def test_xarm7_renders_its_hand_camera_and_a_view_of_the_arm():
-    robot = build_xarm7(mount_pos=(-0.22, 0.0, RMB_TABLE.table.top_z))
+    robot = build_xarm7(mounted(XARM7, (-0.22, 0.0, RMB_TABLE.table.top_z)))
     spec = robot.spec
     spec.worldbody.add_geom(
         type=mujoco.mjtGeom.mjGEOM_BOX,

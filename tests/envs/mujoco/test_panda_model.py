@@ -6,8 +6,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from rmb_lerobot.envs.mujoco.models.panda import RMB_MOUNT_POS, build_panda
+from rmb_lerobot.envs.mujoco.models import panda
+from rmb_lerobot.envs.robots import PANDA
 from rmb_lerobot.envs.workspace import RMB_TABLE
+
+
+def build_panda() -> panda.RobotModel:
+    """RMB's Panda, from its record."""
+    return panda.build_panda(PANDA)
 
 
 def test_names_are_rmbs(at_home):
@@ -21,7 +27,7 @@ def test_names_are_rmbs(at_home):
     assert robot.cameras == {} and arm.hand_camera is None  # RMB's Panda has none
     np.testing.assert_allclose(arm.home_arm_qpos, np.deg2rad([0, 25, 0, -58, 0, 82, -40]))
     assert arm.home_gripper == 1.0 and arm.gripper_ctrl_range == (0.0, 1.0)
-    np.testing.assert_allclose(robot.spec.body(arm.root_body).pos, RMB_MOUNT_POS)
+    np.testing.assert_allclose(robot.spec.body(arm.root_body).pos, PANDA.arms[0].mount.pos)
     # RMB's servos (panda_config.xml): kp 1000/1000/750/750/300/300/300.
     np.testing.assert_allclose(model.actuator_gainprm[:7, 0], [1000] * 2 + [750] * 2 + [300] * 3)
 
@@ -30,7 +36,7 @@ def test_home_tcp_is_over_the_table_in_front_of_the_arm(at_home):
     robot, _, data = at_home(build_panda)
     tcp = data.site(robot.arms[0].tcp_site).xpos
     hx, hy = RMB_TABLE.table.half_size
-    assert RMB_MOUNT_POS[0] < tcp[0] < hx and abs(tcp[1]) < hy
+    assert PANDA.arms[0].mount.pos[0] < tcp[0] < hx and abs(tcp[1]) < hy
     assert tcp[2] > RMB_TABLE.table.top_z + 0.1
 
 

@@ -10,12 +10,14 @@ import pytest
 
 from rmb_lerobot.envs.mujoco.models import xarm_gripper
 from rmb_lerobot.envs.mujoco.models.common import rendered_mesh_faces
-from rmb_lerobot.envs.mujoco.models.xarm7 import HOME, build_xarm7
+from rmb_lerobot.envs.mujoco.models.xarm7 import build_xarm7
+from rmb_lerobot.envs.robots import XARM7, mounted
 from rmb_lerobot.envs.workspace import RMB_TABLE
 
 # RMB stands the xArm7 on its table, 0.22 m behind the centre (env_xarm7_cable.xml line 36).
 ON_TABLE = (-0.22, 0.0, RMB_TABLE.table.top_z)
-build = functools.partial(build_xarm7, mount_pos=ON_TABLE)
+build = functools.partial(build_xarm7, mounted(XARM7, ON_TABLE))
+HOME = XARM7.arms[0].home
 
 
 def test_names_are_rmbs(at_home):
@@ -126,4 +128,4 @@ def test_visual_meshes_are_simplified_and_collision_meshes_kept():
 def test_gripper_needs_a_radian_spec():
     spec = mujoco.MjSpec()  # compiler.degree defaults to True
     with pytest.raises(ValueError, match="degree"):
-        xarm_gripper.add_xarm_gripper(spec, spec.worldbody)
+        xarm_gripper.add_xarm_gripper(spec, spec.worldbody, XARM7.arms[0].gripper, "tcp")
