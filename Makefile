@@ -13,15 +13,17 @@ export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
 VENV := .venv
 # Optional extras the test suite exercises (VLA policies to their download boundary, MT-ACT's
 # sentence encoder, rmb-benchmark on Ray, rmb-data view, the PyBullet TACTO envs). `keyboard` (Linux input devices) is left
-# out: its tests use a test double.
-EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet
+# out: its tests use a test double. The `docs` group builds the docs site (`make docs`, and
+# `make test` builds it --strict).
+EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet --group docs
 STAMP := $(VENV)/.synced
 
-.PHONY: help setup demo test lint format bench bench-learning bench-grid clean
+.PHONY: help setup demo test lint docs docs-check format bench bench-learning bench-grid clean
 
 help:
 	@echo "make demo   - the main job (quick start)"
-	@echo "make test   - lint + the test suite"
+	@echo "make test   - lint + the docs build (--strict) + the test suite"
+	@echo "make docs   - build the docs site into site/ and say where to open it"
 	@echo "make bench  - benchmarks (results go to benchmarks/RESULTS.md by hand)"
 	@echo "make bench-learning - train and evaluate every policy from scripted demos (about 1 h+)"
 	@echo "make bench-grid - the benchmark grid of benchmarks/grid_small.yaml on local Ray (hours)"
@@ -43,8 +45,16 @@ lint: $(STAMP)
 
 # Two workers, one torch/OpenMP thread each (subprocesses inherit it): more threads than free
 # cores makes OpenMP crawl.
-test: lint
+test: lint docs-check
 	OMP_NUM_THREADS=1 $(VENV)/bin/python -m pytest -n 2 --durations=15
+
+# The docs site (mkdocs.yml, docs/): --strict turns every warning (a broken link, a missing
+# API reference, a docstring that does not parse) into a failure.
+docs-check: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet --site-dir site
+
+docs: docs-check
+	@echo "docs built: open file://$(CURDIR)/site/index.html (or run: $(VENV)/bin/mkdocs serve)"
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .
@@ -65,4 +75,4 @@ bench-grid: $(STAMP)
 	$(VENV)/bin/rmb-benchmark benchmarks/grid_small.yaml
 
 clean:
-	rm -rf outputs .pytest_cache
+	rm -rf outputs .pytest_cache site

@@ -74,25 +74,33 @@ class PointCloudUnetConfig(PreTrainedConfig):
             (points in the camera frame), ``"world"`` (points moved to the world frame with
             ``camera_pose``, cropped there, as DP3 and RMB do; needs the pose) or ``"auto"``
             (world when the pose is known, else camera).
-        crop_min / crop_max: Box kept, in metres in the crop frame. None: that frame's default
+        crop_min: Lower corner of the box kept, in metres in the crop frame. None: that
+            frame's default
             (:data:`DEFAULT_CROP`): camera frame (-1.5, -1.5, 0.1)..(1.5, 1.5, 1.5), a depth
             range that drops the far background and invalid pixels; world frame
             (-0.8, -0.5, 0.83)..(0.35, 0.5, 1.6), the UR5e table's workspace above its top
             (z = 0.815 m), so the table surface is dropped and the objects and the arm stay.
+        crop_max: Upper corner of that box (None: the frame's default, as ``crop_min``).
         point_cloud_cache_size: Clouds memoised by the content of their depth (+ colour)
             frame, so later epochs skip the sampling; 0 disables.
-        encoder_channels / encoder_output_dim: DP3's PointNet (per-point MLP with LayerNorm,
-            max-pool, projection + LayerNorm).
+        encoder_channels: Widths of DP3's PointNet per-point MLP (with LayerNorm), which is
+            max-pooled, projected and normalised.
+        encoder_output_dim: Width of the PointNet's output (the projection).
         state_mlp_dims: Hidden and output sizes of the state MLP.
-        down_dims, kernel_size, n_groups, diffusion_step_embed_dim, use_film_scale_modulation:
-            The U-Net, LeRobot's ``DiffusionConditionalUnet1d`` (FiLM conditioning).
+        down_dims: Channels of the U-Net's levels (LeRobot's ``DiffusionConditionalUnet1d``,
+            FiLM conditioning).
+        kernel_size: The U-Net's convolution kernel size.
+        n_groups: Groups of the U-Net's GroupNorm.
+        diffusion_step_embed_dim: Width of the U-Net's diffusion-step embedding.
+        use_film_scale_modulation: FiLM with scale and bias (else bias only).
         do_mask_loss_for_padding: Ignore actions past an episode's end (DP3 trains on them:
             LeRobot pads with copies of the last action, which teaches holding still).
         use_ema: Predict with an exponential moving average of the weights, updated after each
             optimizer step (LeRobot's train loop calls ``policy.update()``) and saved with the
             policy; DP3 and RMB's ``TrainDiffusionPolicy3d`` sample from it (on by default).
-        ema_power / ema_max_decay: Its warm-up, decay = 1 - (1 + step) ** -power, capped
-            (diffusion_policy's ``EMAModel`` as RMB configures it: 0.75, 0.9999).
+        ema_power: The EMA's warm-up, decay = 1 - (1 + step) ** -power (diffusion_policy's
+            ``EMAModel`` as RMB configures it: 0.75).
+        ema_max_decay: The cap on that decay (0.9999).
     """
 
     n_obs_steps: int = 2

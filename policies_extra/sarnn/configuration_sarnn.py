@@ -39,11 +39,13 @@ class SARNNConfig(PreTrainedConfig):
             outputs ``num_keypoints`` channels); the image decoder mirrors them.
         softmax_temperature: Spatial-softmax temperature (small = sharp attention).
         heatmap_size: Width of the Gaussian heatmaps drawn at the predicted keypoints.
-        image_loss_weight / keypoint_loss_weight: Loss scales (RMB's image/attention scales).
+        image_loss_weight: Scale of the image loss (RMB's image scale).
+        keypoint_loss_weight: Scale of the keypoint loss (RMB's attention scale).
         keypoint_loss_warmup_steps: Training steps over which the keypoint loss weight ramps
             up along an S curve (RMB's ``LossScheduler(decay_end=1000, curve_name="s")``).
-        state_noise_std / image_noise_std: Gaussian noise added to the inputs during training
-            only (the targets stay clean), as RMB's augmentation.
+        state_noise_std: Standard deviation of the Gaussian noise added to the state during
+            training only (the targets stay clean), as RMB's augmentation.
+        image_noise_std: The same for the images.
     """
 
     sequence_length: int = 20

@@ -1,7 +1,7 @@
-"""The rollout socket's wire protocol: addresses, request lines and JSON reply lines.
+r"""The rollout socket's wire protocol: addresses, request lines and JSON reply lines.
 
-Everything on the socket is newline-delimited UTF-8 text, one message per line (``\\n``; a
-trailing ``\\r`` is dropped). A client sends:
+Everything on the socket is newline-delimited UTF-8 text, one message per line (``\n``; a
+trailing ``\r`` is dropped). A client sends:
 
 - an **instruction** (any other non-empty line, e.g. ``Put the banana in the blue basket.``):
   starts an episode with it when no episode runs;
@@ -127,7 +127,7 @@ class LineBuffer:
         self._discarding = False
 
     def feed(self, data: bytes) -> list[bytes | None]:
-        """The complete lines in ``data`` (without ``\\n`` / ``\\r\\n``), ``None`` for each
+        r"""The complete lines in ``data`` (without ``\n`` / ``\r\n``), ``None`` for each
         line that was too long."""
         lines: list[bytes | None] = []
         self._buffer += data
