@@ -220,6 +220,19 @@ def lerobot_cli():
     return _run_lerobot_cli
 
 
+# A test that starts LeRobot's CLIs (lerobot-train, then lerobot-eval: fresh interpreters that
+# import LeRobot) took 55-160 s in a full `make test` and up to 400 s alone on a loaded 2-core
+# machine: over the suite's default limit (pyproject.toml), so its own unless it names one.
+LEROBOT_CLI_TIMEOUT_S = 1200
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        uses_cli = "lerobot_cli" in getattr(item, "fixturenames", ())
+        if uses_cli and item.get_closest_marker("timeout") is None:
+            item.add_marker(pytest.mark.timeout(LEROBOT_CLI_TIMEOUT_S))
+
+
 @pytest.fixture(scope="session")
 def make_expert_dataset():
     """``make_expert_dataset(task, root, world_idx=..., cameras=..., size=..., depth=...)``:

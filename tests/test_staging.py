@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -66,6 +67,81 @@ def test_overwrite_exchanges_atomically_and_refuses_without_permission(tmp_path)
         stage.commit(overwrite=True)
     assert _entries(tmp_path) == ["data"]
     assert _entries(tmp_path / "data") == ["new.txt"]
+
+
+# Checks DEST in a tight loop (and reads DEST/version now and then) until STOP exists; prints
+# how often DEST was missing.
+WATCH = """
+import json, os, sys
+dest, stop = sys.argv[1], sys.argv[2]
+checks, missing, seen = 0, 0, set()
+print("ready", flush=True)
+while not os.path.exists(stop):
+    for _ in range(500):
+        checks += 1
+        try:
+            os.stat(dest)
+        except FileNotFoundError:
+            missing += 1
+    try:
+        with open(os.path.join(dest, "version")) as f:
+            seen.add(f.read())
+    except FileNotFoundError:
+        missing += 1
+print(json.dumps({"checks": checks, "missing": missing, "seen": len(seen)}))
+"""
+
+
+def _exchange_supported(directory) -> bool:
+    """Whether this OS and filesystem swap two paths atomically (independently of the package):
+    Linux renameat2(RENAME_EXCHANGE), macOS renamex_np(RENAME_SWAP)."""
+    import ctypes
+    import ctypes.util
+
+    a, b = directory / "probe_a", directory / "probe_b"
+    a.mkdir()
+    b.mkdir()
+    libc = ctypes.CDLL(ctypes.util.find_library("c"), use_errno=True)
+    try:
+        if hasattr(libc, "renameat2"):
+            return libc.renameat2(-100, os.fsencode(a), -100, os.fsencode(b), 2) == 0
+        if hasattr(libc, "renamex_np"):
+            return libc.renamex_np(os.fsencode(a), os.fsencode(b), 2) == 0
+        return False
+    finally:
+        a.rmdir()
+        b.rmdir()
+
+
+def test_overwrite_never_leaves_the_destination_missing_for_a_reader(tmp_path):
+    """``--overwrite`` (``staged_output(dest, overwrite=True)``, as the converters use it): a
+    second process checking DEST all along 1000 replacements never finds it missing."""
+    from rmb_lerobot.converters.atomic import staged_output
+
+    if not _exchange_supported(tmp_path):
+        pytest.skip("no atomic exchange here: the documented fallback has a short window")
+    dest, stop = tmp_path / "out" / "data", tmp_path / "stop"
+    dest.mkdir(parents=True)
+    (dest / "version").write_text("0")
+    watcher = subprocess.Popen(
+        [sys.executable, "-c", WATCH, str(dest), str(stop)], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert watcher.stdout.readline().strip() == "ready"
+        for version in range(1, 1001):
+            with staged_output(dest, overwrite=True) as stage:
+                stage.path.mkdir()
+                (stage.path / "version").write_text(str(version))
+    finally:
+        stop.touch()
+        out, _ = watcher.communicate(timeout=60)
+    report = json.loads(out)
+    assert report["missing"] == 0, (
+        f"{report['missing']} of {report['checks']} checks found no {dest}"
+    )
+    assert report["seen"] > 1, report  # the reader ran during the replacements
+    assert (dest / "version").read_text() == "1000"
+    assert _entries(dest.parent) == ["data"]
 
 
 def test_a_single_file_destination(tmp_path):

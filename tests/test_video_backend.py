@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from rmb_lerobot import keys as K
 from rmb_lerobot import lerobot_names as N
@@ -67,6 +68,7 @@ def test_torchcodec_is_absent_or_loads(tmp_path):
     assert "cannot be loaded" not in probe.stderr
 
 
+@pytest.mark.timeout(900)  # rmb-convert, then LeRobot's loader: two fresh interpreters
 def test_converted_dataset_decodes_without_torchcodec_noise(tmp_path, record):
     episode = record(tmp_path / "episodes" / "demo.rmb")
     root = tmp_path / "dataset"

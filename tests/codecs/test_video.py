@@ -5,6 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import av
+import cv2
 import numpy as np
 import pytest
 
@@ -78,12 +79,28 @@ def test_out_of_range_index_raises_index_error(rgb_video):
             reader[[0, N]]
 
 
-def test_resize_on_read_like_the_original_loader(rgb_video):
+@pytest.mark.parametrize("size", [(32, 24), (40, 29), (100, 75)])  # half, uneven, up
+def test_resize_on_read_like_the_original_loader(rgb_video, size):
+    """RMB's ``RmbData.RmbRgbVideo`` decodes the full frame, then ``cv2.resize(frame,
+    image_size, interpolation=cv2.INTER_LINEAR)`` per frame: the same pixels, not only sizes."""
     path, _ = rgb_video
-    with RgbVideoReader(path, image_size=(32, 24)) as reader:
-        assert reader.shape == (N, 24, 32, 3)
-        assert reader[0].shape == (24, 32, 3)
-        assert reader[0:3].shape == (3, 24, 32, 3)
+    width, height = size
+    with RgbVideoReader(path) as full:
+        frames = full[[0, 7, N - 1]]
+    original = np.stack(
+        [cv2.resize(frame, size, interpolation=cv2.INTER_LINEAR) for frame in frames]
+    )
+    with RgbVideoReader(path, image_size=size) as reader:
+        assert reader.shape == (N, height, width, 3)
+        np.testing.assert_array_equal(reader[0], original[0])
+        np.testing.assert_array_equal(reader[[0, 7, N - 1]], original)
+        assert reader[0:3].shape == (3, height, width, 3)
+    # The interpolation matters at these sizes, so the comparison above tells them apart (at an
+    # exact halving INTER_AREA averages the same 2x2 pixels as INTER_LINEAR).
+    others = [cv2.INTER_NEAREST, cv2.INTER_CUBIC] + ([cv2.INTER_AREA] if width * 2 != W else [])
+    for other in others:
+        resized = np.stack([cv2.resize(frame, size, interpolation=other) for frame in frames])
+        assert not np.array_equal(resized, original), other
 
 
 def test_reads_a_video_without_frame_rate_and_with_b_frames(tmp_path):

@@ -127,6 +127,7 @@ for part in (ACTPolicy(config), pre, post):
 """
 
 
+@pytest.mark.timeout(1200)  # lerobot-eval in a subprocess (tests/conftest.py)
 def test_lerobot_eval_cli_runs_on_an_rmb_env_type(tmp_path):
     # A tiny randomly initialised ACT is enough: the point is that the unmodified CLI builds
     # our env from --env.type and reports a success rate.
@@ -154,4 +155,6 @@ def test_lerobot_eval_cli_runs_on_an_rmb_env_type(tmp_path):
     assert result.returncode == 0, result.stderr[-3000:]
     info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
     assert info["overall"]["n_episodes"] == 1
-    assert 0.0 <= info["overall"]["pc_success"] <= 100.0
+    # 6 steps of an untrained ACT from the start pose cannot insert the peg: a success here
+    # would be the env's ``is_success``, which lerobot-eval counts, firing with the peg out.
+    assert info["overall"]["pc_success"] == 0.0

@@ -38,11 +38,25 @@ def test_rel_keys_are_copied_not_recomputed(tmp_path, record):
         assert np.all(ep["measured_joint_pos_rel"][:] == 42.0)
 
 
-def test_switch_refuses_an_existing_destination(tmp_path, record):
+def test_switch_refuses_an_existing_destination(tmp_path, record, psnr):
+    import h5py
+
     src = record(tmp_path / "a.rmb")
     dst = record(tmp_path / "b.hdf5")
+    with h5py.File(dst, "a") as h5:  # the old destination, told apart from the new one
+        h5["measured_joint_pos"][...] = 42.0
     before = dst.read_bytes()
     with pytest.raises(RmbFormatError, match="destination exists"):
         switch_format(src, dst)
     assert dst.read_bytes() == before
-    switch_format(src, dst, overwrite=True)
+    assert switch_format(src, dst, overwrite=True) == dst
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.rmb", "b.hdf5"]  # no temporaries
+    with open_episode(src) as a, open_episode(dst) as b:  # now the switched episode
+        assert b.attrs["format"] == "RmbData-SingleHDF5" and sorted(a.keys()) == sorted(b.keys())
+        for key in a:
+            if K.is_rgb_image_key(key):
+                assert psnr(a[key][:], b[key][:]) > 30
+            elif K.is_depth_image_key(key):
+                assert np.abs(a[key][:] - b[key][:]).max() <= 0.0005 + 1e-6
+            else:
+                np.testing.assert_array_equal(a[key][:], b[key][:])

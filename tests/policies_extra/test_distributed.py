@@ -207,6 +207,7 @@ def first_observation(dataset: Path) -> dict[str, torch.Tensor]:
     return {**batch, "task": [frame["task"]]}
 
 
+@pytest.mark.timeout(1200)  # lerobot-train in a subprocess (tests/conftest.py)
 @pytest.mark.parametrize("name", PLUGINS)
 def test_lerobot_train_runs_data_parallel_on_two_processes(name, dataset, tmp_path):
     plugin = PLUGINS[name]

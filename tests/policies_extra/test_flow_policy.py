@@ -139,10 +139,29 @@ def test_one_step_inference_is_deterministic_given_a_seed(depth_box, assert_seed
 
 
 def test_few_step_inference_is_a_config_choice(depth_box):
-    policy = make_flow_policy(num_inference_steps=3)
-    noise = torch.randn(1, policy.config.horizon, ACTION_DIM)
-    chunk = policy.predict_action_chunk(depth_box.observation(1), noise=noise)
-    assert chunk.shape == (1, 4, ACTION_DIM)
+    """The same weights and noise: 3 Euler steps (the velocity at t = eps, 1/3, 2/3 of the way)
+    give another chunk than the default single step at t = eps."""
+    one, three = make_flow_policy(), make_flow_policy(num_inference_steps=3)  # both seeded 0
+    torch.testing.assert_close(three.state_dict(), one.state_dict())
+    times: dict[int, list[float]] = {1: [], 3: []}
+    for steps, policy in ((1, one), (3, three)):
+        model = policy.sampling_model()  # the EMA copy
+        velocity = model.velocity
+
+        def recording(x, t, cond, velocity=velocity, seen=times[steps]):
+            seen.append(t.item())
+            return velocity(x, t, cond)
+
+        model.velocity = recording
+    noise = torch.randn(1, one.config.horizon, ACTION_DIM)
+    with torch.no_grad():
+        chunk_1 = one.predict_action_chunk(depth_box.observation(1), noise=noise)
+        chunk_3 = three.predict_action_chunk(depth_box.observation(1), noise=noise)
+    assert chunk_1.shape == chunk_3.shape == (1, 4, ACTION_DIM)
+    eps = one.config.eps
+    assert times[1] == pytest.approx([eps])
+    assert times[3] == pytest.approx([eps, eps + (1 - eps) / 3, eps + 2 * (1 - eps) / 3])
+    assert (chunk_3 - chunk_1).abs().max() > 1e-3
 
 
 def test_save_load_round_trip_gives_identical_actions(depth_box, ema_save_load):

@@ -142,6 +142,7 @@ def test_a_training_step_and_actions_through_lerobots_factories(converted, fake_
     assert action.shape == (1, 7) and torch.isfinite(action).all()
 
 
+@pytest.mark.timeout(1200)  # lerobot-train in a subprocess (tests/conftest.py)
 def test_lerobot_train_runs_the_recipe_with_the_hub_replaced_by_a_local_cache(
     converted, tiny_groot, tmp_path
 ):

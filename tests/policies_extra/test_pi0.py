@@ -148,6 +148,7 @@ def test_a_training_step_and_actions_through_lerobots_factories(
     assert len(policy._action_queue) == CHUNK - 1  # the rest of the chunk is queued
 
 
+@pytest.mark.timeout(1200)  # lerobot-train in a subprocess (tests/conftest.py)
 def test_lerobot_train_fine_tunes_a_local_checkpoint_with_the_recipes_rename_map(
     converted, local_tokenizers, tmp_path
 ):

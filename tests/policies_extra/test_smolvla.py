@@ -141,6 +141,7 @@ def test_a_training_step_and_actions_through_lerobots_factories(converted, smolv
     assert len(policy._queues["action"]) == CHUNK - 1  # the rest of the chunk is queued
 
 
+@pytest.mark.timeout(1200)  # lerobot-train in a subprocess (tests/conftest.py)
 def test_lerobot_train_runs_the_recipe_with_the_hub_replaced_by_a_local_cache(
     converted, smolvlm, tmp_path
 ):

@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -185,3 +187,38 @@ def test_rollout_cli_runs_mt_act_with_an_instruction_from_the_socket(
     assert [(r["instruction"], r["status"], r["steps"]) for r in results] == [
         (BANANA, "failure", 4)
     ]
+
+
+def test_rollout_cli_ctrl_c_aborts_the_episode_and_exits_130(mt_act_checkpoint, sock_path):
+    """A real ``rmb-rollout`` process, as from a shell: Ctrl-C (SIGINT) mid-episode aborts the
+    episode for its client, removes the socket file and exits with 130."""
+    address = f"unix:{sock_path}"
+    command = [sys.executable, "-m", "rmb_lerobot.cli.rollout", str(mt_act_checkpoint)]
+    command += [*ENV_ARGS, "--env.episode_length=100000", "--listen", address, "--device", "cpu"]
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": "1"},
+    )
+    try:
+        deadline = time.monotonic() + 600
+        while not sock_path.exists():
+            if process.poll() is not None:
+                pytest.fail(f"rmb-rollout ended early: {process.communicate()[1][-3000:]}")
+            assert time.monotonic() < deadline, "rmb-rollout never listened"
+            time.sleep(0.2)
+        with RolloutClient(address, timeout=120) as client:
+            assert client.instruct(BANANA)["status"] == "started"
+            process.send_signal(signal.SIGINT)  # what Ctrl-C sends
+            result = client.result()
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    assert (result["status"], result["reason"]) == ("aborted", "shutdown")
+    assert process.returncode == 130, stderr[-3000:]
+    assert "stopped by SIGINT; socket closed" in stderr
+    assert not sock_path.exists()

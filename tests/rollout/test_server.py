@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import signal
 import socket
@@ -66,7 +68,9 @@ def test_done_from_another_connection_ends_the_episode_for_both(make_push_env, p
         RolloutClient(server.address, timeout=10) as other,
     ):
         owner.instruct(BANANA)
+        deadline = time.monotonic() + 30
         while len(policy.calls) < 5:  # it runs
+            assert time.monotonic() < deadline, f"{len(policy.calls)} policy calls in 30 s, not 5"
             time.sleep(0.01)
         by_done = other.done()
         to_owner = owner.result()
@@ -115,6 +119,45 @@ def test_errors_are_json_and_the_connection_stays_usable(make_push_env, policy, 
         assert busy.value.code == "busy" and APPLE in busy.value.reply["message"]
         assert client.done()["status"] == "failure"
     assert env.unwrapped.resets == [{"seed": 0, "instruction": APPLE}]  # nothing else reset
+
+
+def test_a_connection_over_the_limit_is_told_so_and_closed(make_push_env, policy, serving):
+    """``max_connections`` held: one more gets the ``too_many_connections`` reply, then EOF;
+    once one of them leaves, a new connection is served again. Loopback TCP only."""
+    with serving(make_push_env(), policy, "tcp:127.0.0.1:0", max_connections=2) as server:
+        address = ("127.0.0.1", server.address.port)
+
+        def connect() -> tuple[socket.socket, dict]:
+            """A raw connection and the server's first reply to it ('done' with no episode
+            running: ``not_running`` from a served connection)."""
+            sock = socket.create_connection(address, timeout=10)
+            with contextlib.suppress(OSError):  # a refused one may be closed before this
+                sock.sendall(b"done\n")
+            line = sock.makefile("rb").readline()
+            return sock, json.loads(line)
+
+        held = [connect() for _ in range(2)]
+        assert [reply["error"] for _, reply in held] == ["not_running", "not_running"]
+        extra, reply = connect()
+        assert reply == {
+            "status": "error",
+            "error": "too_many_connections",
+            "message": "the server holds its maximum of connections",
+            "request": None,  # answered on connecting, before reading anything
+        }
+        assert extra.recv(64) == b""  # closed by the server
+        extra.close()
+        for sock, _ in held:  # the held ones are still served
+            sock.sendall(b"done\n")
+            assert json.loads(sock.makefile("rb").readline())["error"] == "not_running"
+        held.pop()[0].close()
+        deadline = time.monotonic() + 10  # the server notices the close on its next poll
+        while (reply := connect())[1]["error"] == "too_many_connections":
+            reply[0].close()
+            assert time.monotonic() < deadline, "a freed connection slot was never reused"
+        assert reply[1]["error"] == "not_running"
+        reply[0].close()
+        held[0][0].close()
 
 
 def test_crlf_lines_and_split_packets(make_push_env, policy, serving, sock_path):
