@@ -12,6 +12,7 @@ first). Non-finite numbers in the dataset are refused unless ``allow_non_finite`
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -46,7 +47,22 @@ DEFAULT_ENV = "LeRobot"  # ``env`` attribute of episodes from datasets without a
 
 
 def open_dataset(repo_id: str | None, root: str | Path | None) -> LeRobotDataset:
-    """The dataset at ``root`` (never downloaded), else ``repo_id`` as LeRobot resolves it."""
+    """The dataset at ``root`` (never downloaded), else ``repo_id`` as LeRobot resolves it.
+
+    ``repo_id`` is read from ``$HF_LEROBOT_HOME/REPO_ID`` if it is there, and otherwise
+    downloaded from the Hub into it, except with ``HF_HUB_OFFLINE`` set.
+
+    Args:
+        repo_id: The dataset's id (``namespace/name``).
+        root: The dataset's directory, or None for ``$HF_LEROBOT_HOME/REPO_ID``.
+
+    Returns:
+        The dataset.
+
+    Raises:
+        RmbFormatError: ``root`` (or, offline, ``$HF_LEROBOT_HOME/REPO_ID``) holds no dataset.
+        ValueError: Neither ``repo_id`` nor ``root`` is given.
+    """
     if root is not None:
         root = Path(root)
         if not (root / _INFO_FILE).is_file():
@@ -54,7 +70,30 @@ def open_dataset(repo_id: str | None, root: str | Path | None) -> LeRobotDataset
         return LeRobotDataset(repo_id or f"local/{root.name}", root=root, video_backend="pyav")
     if repo_id is None:
         raise ValueError("give a REPO_ID or --root DIR")
+    local = _lerobot_home() / repo_id
+    if not (local / _INFO_FILE).is_file() and _hub_offline():
+        raise RmbFormatError(
+            f"dataset {repo_id} is not in $HF_LEROBOT_HOME and HF_HUB_OFFLINE is set, so it is "
+            "not downloaded from the Hub; unset HF_HUB_OFFLINE to download it, or give its "
+            "directory with --root",
+            path=local,
+        )
     return LeRobotDataset(repo_id, video_backend="pyav")
+
+
+def _lerobot_home() -> Path:
+    """``$HF_LEROBOT_HOME`` as LeRobot resolves it (read when LeRobot is imported)."""
+    from lerobot.utils.constants import HF_LEROBOT_HOME
+
+    return Path(HF_LEROBOT_HOME)
+
+
+def _hub_offline() -> bool:
+    """Whether ``HF_HUB_OFFLINE`` is set now (huggingface_hub reads it at import only)."""
+    from huggingface_hub import constants
+
+    value = os.environ.get("HF_HUB_OFFLINE", "").strip().upper()
+    return constants.HF_HUB_OFFLINE or value in {"1", "ON", "YES", "TRUE"}
 
 
 def _split_vector(

@@ -7,8 +7,9 @@ only noted, and :func:`raise_if_signalled` raises it at the next safe point, bet
 or right after the episode is complete; elsewhere it raises at once.
 
 The parent process (``rmb-collect``) raises :class:`Interrupted`, inside
-:func:`interrupts_raise`; worker processes exit quietly (:func:`exit_on_signal`: SystemExit,
-which multiprocessing turns into an exit status without a traceback).
+:func:`interrupts_raise`. Its worker processes install no handler (see
+:mod:`rmb_lerobot.envs.collect`: a handler whose exception is lost leaves a worker that cannot
+be stopped); the parent stops them through a shared flag.
 """
 
 from __future__ import annotations

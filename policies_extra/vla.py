@@ -12,7 +12,11 @@ e.g. Pick's "Put the banana in the blue basket."), which LeRobot hands the polic
 
 from __future__ import annotations
 
+import argparse
 import json
+import shlex
+import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -186,3 +190,47 @@ def train_args(
             f"--rename_map={json.dumps(camera_rename_map(cameras, policy))}",
         ]
     return args
+
+
+def train_command(dataset_root: str | Path, policy: str, **kwargs: str | None) -> str:
+    """The ``lerobot-train`` command of :func:`train_args` as one line to paste into a shell.
+
+    Every argument is shell-quoted (:func:`shlex.join`): ``--rename_map``'s JSON holds quotes
+    and spaces, which a plain ``" ".join`` hands bash as several broken words.
+
+    Args:
+        dataset_root: The converted dataset's directory.
+        policy: The recipe (:data:`RECIPES`: pi0, pi05, smolvla, groot).
+        **kwargs: ``repo_id`` and ``checkpoint``, as for :func:`train_args`.
+
+    Returns:
+        E.g. ``lerobot-train --policy.path=lerobot/pi0_base ... '--rename_map={"..."}'``.
+    """
+    return shlex.join(["lerobot-train", *train_args(dataset_root, policy, **kwargs)])
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m rmb_lerobot.policies_extra.vla DATASET POLICY``: print the command line."""
+    parser = argparse.ArgumentParser(
+        prog="python -m rmb_lerobot.policies_extra.vla",
+        description="Print the lerobot-train command (shell-quoted) that fine-tunes a VLA on a "
+        "converted dataset; add --output_dir, --steps, --batch_size, --policy.device.",
+    )
+    parser.add_argument("dataset", type=Path, help="the converted dataset's directory")
+    parser.add_argument("policy", choices=sorted(RECIPES), help="the VLA recipe")
+    parser.add_argument("--repo-id", help="dataset id (default: local/DATASET_NAME)")
+    parser.add_argument("--checkpoint", help="base checkpoint (default: the recipe's Hub id)")
+    args = parser.parse_args(argv)
+    try:
+        command = train_command(
+            args.dataset, args.policy, repo_id=args.repo_id, checkpoint=args.checkpoint
+        )
+    except (RmbFormatError, ValueError) as error:
+        print(f"{parser.prog}: error: {error}", file=sys.stderr)
+        return 2
+    print(command)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

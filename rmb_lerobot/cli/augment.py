@@ -11,6 +11,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, apply_formatter
 from rmb_lerobot.errors import RmbFormatError
 
 REGIONS_FILE = "regions.yaml"
@@ -40,8 +41,16 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help=f"propose regions from the demo (written to DIR/{REGIONS_FILE})",
     )
-    parser.add_argument("--samples-per-region", type=int, required=True, metavar="N")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR")
+    parser.add_argument(
+        "--samples-per-region",
+        type=int,
+        required=True,
+        metavar="N",
+        help="augmented episodes per acceptable region",
+    )
+    parser.add_argument(
+        "--out", type=Path, required=True, metavar="DIR", help="directory for the new episodes"
+    )
     parser.add_argument("--seed", type=int, default=0, help="env reset seed and sampling seed")
     parser.add_argument(
         "--radius", type=float, default=0.02, help="metres, for proposed regions (default 0.02)"
@@ -59,9 +68,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="max random rotation in rad per metre of radius, for regions that set no "
         "max_rotation_deg (RoboManipAug: 2.0)",
     )
-    parser.add_argument("--format", choices=["rmb", "hdf5"], default=None, dest="fmt")
+    parser.add_argument(
+        "--format",
+        choices=["rmb", "hdf5"],
+        default=None,
+        dest="fmt",
+        help="episode variant of the results (default: the base episode's)",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace existing episodes")
-    return parser
+    return apply_formatter(parser, DefaultsHelpFormatter)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

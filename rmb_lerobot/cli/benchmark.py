@@ -1,11 +1,13 @@
-"""``rmb-benchmark [CONFIG]``: the paper's policies x tasks x seeds x worlds grid, on Ray.
+"""``rmb-benchmark CONFIG | --example``: the paper's policies x tasks x seeds x worlds grid, on Ray.
 
 Each cell is the unmodified command-line tool in a Ray task: ``rmb-collect`` (expert demos per
 task), ``rmb-convert to-lerobot``, ``lerobot-train`` (per policy, task, seed) and ``lerobot-eval
 --env.world_idx=K`` (per world). Cells done in an earlier run into the same ``--out`` are
 skipped, a failing cell is reported and the rest goes on. Writes ``OUT/results.jsonl`` (one row
 per policy, task, seed, world) and ``OUT/report/`` (markdown tables as the paper's Tables II and
-III, heatmaps, bar charts, learning and data-size curves).
+III, heatmaps, bar charts, learning and data-size curves). Without a config file or
+``--example`` (the built-in example grid) it prints its usage and exits 2: running a grid, hours
+of CPU, is never a default.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from rmb_lerobot.benchmark.config import BenchmarkConfigError, load_config
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, apply_formatter
 from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 
 
@@ -28,14 +31,20 @@ def build_parser() -> argparse.ArgumentParser:
         "CPUs of this machine, no dashboard); --ray-address joins a running cluster, where --out "
         "must be a path every node sees (a shared filesystem), with this package installed on "
         "every node. Exit status: 0 all cells succeeded, 1 some failed (see the report), 2 a "
-        "bad config.",
+        "bad config or command line (no CONFIG and no --example).",
     )
     parser.add_argument(
         "config",
         nargs="?",
         type=Path,
         help="YAML or JSON grid, e.g. benchmarks/grid_small.yaml "
-        "(keys: rmb_lerobot/benchmark/config.py)",
+        "(keys: rmb_lerobot/benchmark/config.py); required unless --example",
+    )
+    parser.add_argument(
+        "--example",
+        action="store_true",
+        help="run the built-in example grid instead of a CONFIG: ACT on insert, seed 0, worlds "
+        "0-5 (50 demos; 9 cells: collect, convert, train and 6 evaluations)",
     )
     grid = parser.add_argument_group("grid (override the config)")
     grid.add_argument("--out", type=Path, help="output directory (shared path on a cluster)")
@@ -49,7 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
     grid.add_argument("--steps", type=int, help="training steps of every policy")
     grid.add_argument("--batch-size", type=int, help="batch size of every policy")
     grid.add_argument("--cameras", nargs="+", help="default cameras of the policies")
-    grid.add_argument("--image-size", nargs=2, type=int, metavar=("W", "H"))
+    grid.add_argument(
+        "--image-size", nargs=2, type=int, metavar=("W", "H"), help="size of every camera"
+    )
     grid.add_argument("--device", help="--policy.device for training and evaluation")
     ray = parser.add_argument_group("execution")
     ray.add_argument("--ray-address", help="an existing Ray cluster (e.g. auto, ray://host:10001)")
@@ -57,7 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
     ray.add_argument("--dry-run", action="store_true", help="list the cells and their commands")
     ray.add_argument("--report-only", action="store_true", help="only re-render OUT/report")
     ray.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return parser
+    return apply_formatter(parser, DefaultsHelpFormatter)
 
 
 def overrides(args: argparse.Namespace) -> dict:
@@ -79,7 +90,15 @@ def overrides(args: argparse.Namespace) -> dict:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.config is None and not args.example:
+        parser.error(
+            "a grid needs a CONFIG file (e.g. benchmarks/grid_small.yaml) or --example for the "
+            "built-in example grid"
+        )
+    if args.config is not None and args.example:
+        parser.error(f"--example runs the built-in grid: give it or CONFIG {args.config}, not both")
     try:
         config = load_config(args.config, overrides(args))
     except BenchmarkConfigError as error:

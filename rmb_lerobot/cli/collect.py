@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
+from rmb_lerobot.cli.help import DefaultsHelpFormatter
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.envs.registry import ENVS, entry_for
 from rmb_lerobot.errors import RmbFormatError
@@ -26,6 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     names = ", ".join(sorted(e.rmb_env_name for e in ENVS.values()))
     parser = argparse.ArgumentParser(
         prog="rmb-collect",
+        formatter_class=DefaultsHelpFormatter,
         description=__doc__.splitlines()[0].split(": ", 1)[1],
         epilog=f"environments: {names} (short names like 'insert' work too). "
         "Each episode is built in a hidden temporary in --out and moved into place when "
@@ -38,7 +40,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("env", help="environment, e.g. MujocoUR5eInsert or insert")
     parser.add_argument("--episodes", type=int, required=True, help="episodes to record")
     parser.add_argument("--out", type=Path, required=True, help="output directory")
-    parser.add_argument("--format", choices=["rmb", "hdf5"], default="rmb", dest="fmt")
+    parser.add_argument(
+        "--format",
+        choices=["rmb", "hdf5"],
+        default="rmb",
+        dest="fmt",
+        help="episode variant: rmb (NAME.rmb, compact) or hdf5 (NAME.hdf5, single file)",
+    )
     parser.add_argument(
         "--world-idx",
         type=int,
@@ -53,7 +61,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="cameras to record, any of the env's (its scene's fixed cameras and its robot's, "
         "e.g. front left right hand for the UR5e envs; default: all of them); none: no images",
     )
-    parser.add_argument("--image-size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
+    parser.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        default=[640, 480],
+        metavar=("W", "H"),
+        help="camera image width and height",
+    )
     parser.add_argument("--no-depth", action="store_true", help="record RGB only")
     parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
     parser.add_argument(
@@ -75,14 +90,23 @@ def build_parser() -> argparse.ArgumentParser:
         "--success-only", action="store_true", help="keep only successful episodes (retrying)"
     )
     parser.add_argument("--workers", type=int, default=1, help="parallel worker processes")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--depth-codec", default="rmb-videoio", choices=sorted(DEPTH_CODECS))
+    parser.add_argument(
+        "--seed", type=int, default=0, help="episode k resets with seed + k (retries: further)"
+    )
+    parser.add_argument(
+        "--depth-codec",
+        default="rmb-videoio",
+        choices=sorted(DEPTH_CODECS),
+        help="depth video codec of the rmb variant (rmb-videoio: the original RMB's)",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace existing episodes")
     parser.add_argument(
         "--cycle-instructions",
         action="store_true",
-        help="language-conditioned tasks (pick): cover every instruction evenly, each across "
-        "the worlds, instead of drawing one per episode from the seed",
+        help="language-conditioned tasks (pick): give episode k the next instruction in turn "
+        "instead of drawing one from the seed, so N episodes cover min(N, 18) of Pick's 18 "
+        "instructions, each equally often (N a multiple of 18); the worlds cycle alongside, "
+        "and 18 x 6 episodes hold every instruction in every world",
     )
     return parser
 
@@ -90,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     args = build_parser().parse_args(argv)
-    from rmb_lerobot.envs.collect import CollectConfig, collect
+    from rmb_lerobot.envs.collect import CollectConfig, WorkerDied, collect
     from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
 
     with interrupts_raise(on_repeat=lambda signum: _stop_at_once(signum, args.out)):
@@ -149,6 +173,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         except (ValueError, RmbFormatError) as exc:
             print(f"rmb-collect: error: {exc}", file=sys.stderr)
             return 2
+        except WorkerDied as exc:
+            complete = _complete_episodes(config)
+            print(
+                f"rmb-collect: error: {exc} ({complete} of {args.episodes} complete; partial "
+                f"ones removed)",
+                file=sys.stderr,
+            )
+            return 1
         except (Interrupted, KeyboardInterrupt) as exc:
             signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
             if run is not None:

@@ -12,11 +12,14 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 from rmb_lerobot import keys as K
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, apply_formatter, first_line
+from rmb_lerobot.cli.hub_errors import HubUnavailable, describe_hub_error, is_hub_error
 from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.episode import switch_format
@@ -87,6 +90,12 @@ def _add_to_lerobot(sub) -> None:
         help="also convert depth, as LeRobot depth features (default: off, because LeRobot "
         "0.6 policies take every video feature as an RGB camera input)",
     )
+    to.add_argument(
+        "--allow-missing-depth",
+        action="store_true",
+        help="with --depth, convert a camera whose depth file is missing while other listed "
+        "cameras have depth, without its depth (default: refuse the episode, naming the file)",
+    )
     to.add_argument("--task", help="task text for every episode (default: its task_desc)")
     to.add_argument(
         "--fps",
@@ -109,6 +118,7 @@ def _add_to_lerobot(sub) -> None:
     to.add_argument("--private", action="store_true", help="create the Hub repository private")
     to.add_argument("--branch", help="Hub branch to push to")
     to.add_argument("--tags", nargs="+", default=[], help="extra dataset card tags")
+    _add_verbose(to)
 
 
 def _add_from_lerobot(sub) -> None:
@@ -121,10 +131,22 @@ def _add_from_lerobot(sub) -> None:
         "CAM_rgb_image, depth features observation.images.CAM_depth -> CAM_depth_image, "
         "observation.Q / action.Q -> measured_Q / command_Q, next.reward -> reward.",
     )
-    back.add_argument("repo_id", nargs="?", help="dataset id (looked up in $HF_LEROBOT_HOME)")
-    back.add_argument("--root", type=Path, help="dataset directory")
+    back.add_argument(
+        "repo_id",
+        nargs="?",
+        help="dataset id: read from $HF_LEROBOT_HOME/REPO_ID, or, if it is not there, "
+        "downloaded from the Hub into it (never with HF_HUB_OFFLINE=1: then a missing dataset "
+        "is an error)",
+    )
+    back.add_argument("--root", type=Path, help="dataset directory (never downloaded)")
     back.add_argument("--output", type=Path, required=True, help="directory for the episodes")
-    back.add_argument("--format", choices=_FORMATS, default="rmb", dest="fmt")
+    back.add_argument(
+        "--format",
+        choices=_FORMATS,
+        default="rmb",
+        dest="fmt",
+        help="episode variant: rmb (NAME.rmb, compact) or hdf5 (NAME.hdf5, single file)",
+    )
     back.add_argument("--episodes", type=int, nargs="+", help="episode indices (default: all)")
     back.add_argument(
         "--state-keys",
@@ -133,7 +155,13 @@ def _add_from_lerobot(sub) -> None:
         metavar="KEY[:DIM]",
         help="RMB keys observation.state splits into, in order (sizes for all but the last)",
     )
-    back.add_argument("--action-keys", nargs="+", default=[], metavar="KEY[:DIM]")
+    back.add_argument(
+        "--action-keys",
+        nargs="+",
+        default=[],
+        metavar="KEY[:DIM]",
+        help="RMB keys action splits into, in order (sizes for all but the last)",
+    )
     back.add_argument(
         "--camera-map",
         nargs="+",
@@ -150,15 +178,31 @@ def _add_from_lerobot(sub) -> None:
     )
     back.add_argument("--overwrite", action="store_true", help="replace an existing --output")
     _add_allow_non_finite(back)
+    _add_verbose(back)
+
+
+def _add_verbose(parser) -> None:
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="show the video libraries' own output (FFmpeg reports, the SVT-AV1 encoder's "
+        "Svt[info] lines), which is quiet otherwise",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="rmb-convert", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="rmb-convert",
+        description=first_line(__doc__),
+        formatter_class=DefaultsHelpFormatter,
+        epilog="Hub errors (a download or an upload that failed) end in one line saying what "
+        "failed, why and what to do (exit status 1); bad input exits 2.",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     _add_switch(sub)
     _add_to_lerobot(sub)
     _add_from_lerobot(sub)
-    return parser
+    return apply_formatter(parser, DefaultsHelpFormatter)
 
 
 def _pairs(items: Sequence[str], option: str) -> dict[str, str]:
@@ -171,11 +215,25 @@ def _pairs(items: Sequence[str], option: str) -> dict[str, str]:
     return pairs
 
 
-def _quiet_libraries() -> None:
-    """FFmpeg's per-video encoder reports and ``datasets``' per-episode bars drown our bars."""
+# SVT-AV1 (LeRobot's default video codec) prints its banner and settings, a dozen Svt[info]
+# lines per video, straight to stderr at its own log level, which it reads from SVT_LOG whenever
+# an encoder starts (1: errors only); spawned conversion workers inherit it.
+SVT_LOG_ERRORS = "1"
+
+
+def _quiet_libraries(verbose: bool = False) -> None:
+    """FFmpeg's per-video encoder reports, SVT-AV1's Svt[info] lines and ``datasets``'
+    per-episode bars drown our bars: errors only, unless ``verbose``.
+
+    Args:
+        verbose: ``--verbose``: leave the libraries' output as it is.
+    """
+    if verbose:
+        return
     import av
     import datasets
 
+    os.environ.setdefault("SVT_LOG", SVT_LOG_ERRORS)  # a level the user set is kept
     av.logging.set_libav_level(av.logging.ERROR)
     datasets.disable_progress_bars()
 
@@ -188,7 +246,7 @@ def _to_lerobot(args) -> None:
         check_repo_id(args.repo_id)
     if args.workers < 1:
         raise ValueError("--workers must be >= 1")
-    _quiet_libraries()
+    _quiet_libraries(args.verbose)
     options = ConvertOptions(
         state_keys=tuple(args.state_keys),
         action_keys=tuple(args.action_keys),
@@ -198,6 +256,7 @@ def _to_lerobot(args) -> None:
         fps=args.fps,
         skip=args.skip,
         allow_non_finite=args.allow_non_finite,
+        allow_missing_depth=args.allow_missing_depth,
     )
     repo_id, root = to_lerobot(
         args.src,
@@ -210,30 +269,45 @@ def _to_lerobot(args) -> None:
     )
     print(f"wrote LeRobotDataset {repo_id} at {root}")
     if args.push_to_hub:
-        push_dataset(repo_id, root, private=args.private, branch=args.branch, tags=args.tags)
+        try:
+            push_dataset(repo_id, root, private=args.private, branch=args.branch, tags=args.tags)
+        except Exception as exc:
+            if not is_hub_error(exc):
+                raise
+            raise HubUnavailable(
+                describe_hub_error(f"pushing {repo_id} to the Hub", exc, upload=True)
+                + f" (the converted dataset is kept at {root})"
+            ) from exc
         print(f"pushed to https://huggingface.co/datasets/{repo_id}")
 
 
 def _from_lerobot(args) -> None:
     from rmb_lerobot.converters import MappingOverrides, from_lerobot
 
-    _quiet_libraries()
+    _quiet_libraries(args.verbose)
     overrides = MappingOverrides(
         state_keys=tuple(args.state_keys),
         action_keys=tuple(args.action_keys),
         cameras=_pairs(args.camera_map, "--camera-map"),
         keys=_pairs(args.key_map, "--key-map"),
     )
-    written = from_lerobot(
-        args.repo_id,
-        root=args.root,
-        output=args.output,
-        fmt=args.fmt,
-        episodes=args.episodes,
-        overrides=overrides,
-        overwrite=args.overwrite,
-        allow_non_finite=args.allow_non_finite,
-    )
+    try:
+        written = from_lerobot(
+            args.repo_id,
+            root=args.root,
+            output=args.output,
+            fmt=args.fmt,
+            episodes=args.episodes,
+            overrides=overrides,
+            overwrite=args.overwrite,
+            allow_non_finite=args.allow_non_finite,
+        )
+    except Exception as exc:
+        if not is_hub_error(exc):
+            raise
+        raise HubUnavailable(
+            describe_hub_error(f"downloading dataset {args.repo_id} from the Hub", exc)
+        ) from exc
     print(f"wrote {len(written)} episodes to {args.output}")
 
 
@@ -243,6 +317,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with sigterm_as_keyboard_interrupt():
             _run(args)
+    except HubUnavailable as exc:
+        print(f"rmb-convert: error: {exc}", file=sys.stderr)
+        return 1
     except (RmbFormatError, FileExistsError, ValueError) as exc:
         print(f"rmb-convert: error: {exc}", file=sys.stderr)
         return 2

@@ -12,6 +12,12 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rmb_lerobot.cli.help import (
+    DefaultsHelpFormatter,
+    RawDescriptionDefaultsHelpFormatter,
+    apply_formatter,
+    first_line,
+)
 from rmb_lerobot.cli.sigterm import interrupted_signal, sigterm_as_keyboard_interrupt
 from rmb_lerobot.errors import RmbFormatError
 
@@ -22,9 +28,10 @@ rmb-data refine PATH... --task-desc TEXT  set the task description (RefineRmbDat
 rmb-data add-pointcloud PATH... --camera NAME   clouds from depth (AddPointCloudToRmbData)
 rmb-data view EPISODE                     the episode in the rerun viewer (VisualizeData)
 rmb-data tile-videos DIR --out FILE       lerobot-eval's rollout videos tiled (TileRolloutVideos)
+rmb-data verify PATH...                   read every byte, report corruption (exit code 1 if any)
 
 Exit codes: 0 done; 1 compare found differences beyond the tolerances, or info met
-unreadable episodes; 2 bad input (the message names the file and key); 128 + signal when
+unreadable episodes, or verify found a problem; 2 bad input (the message names the file and key); 128 + signal when
 interrupted (files being written are discarded, existing ones stay as they were).
 """
 
@@ -206,10 +213,35 @@ def _add_tile(sub) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
 
 
+def _add_verify(sub) -> None:
+    p = sub.add_parser(
+        "verify",
+        help="read every byte of episodes and LeRobot datasets; exit code 1 on any finding",
+        description="Check RMB episodes (.rmb, .hdf5) and converted LeRobot v3 datasets in full: "
+        "every HDF5 dataset read (checksums of files we wrote), every video frame decoded, "
+        "recorded video SHA-256 digests compared, step and frame counts against 'time', NaN/inf "
+        "in float keys, every listed camera with RGB (and depth where any camera has depth); "
+        "for datasets: parquet files, episode index and timestamps, statistics. Prints a table "
+        "and every finding; exit code 1 if anything was found.",
+    )
+    p.add_argument(
+        "paths",
+        type=Path,
+        nargs="+",
+        metavar="PATH",
+        help="episodes, LeRobot dataset roots, or directories holding them",
+    )
+    p.add_argument(
+        "--allow-non-finite", action="store_true", help="do not report NaN/inf values in the data"
+    )
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rmb-data",
-        description=__doc__.splitlines()[0],
+        description=first_line(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog=OVERVIEW,
     )
@@ -220,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_pointcloud(sub)
     _add_view(sub)
     _add_tile(sub)
+    _add_verify(sub)
+    apply_formatter(parser, DefaultsHelpFormatter)
+    parser.formatter_class = RawDescriptionDefaultsHelpFormatter  # its epilog is laid out
     return parser
 
 
@@ -321,6 +356,19 @@ def _tile(args) -> int:
     return 0
 
 
+def _verify(args) -> int:
+    from rmb_lerobot.data.verify import format_table, verify_paths
+
+    reports = verify_paths(
+        args.paths, allow_non_finite=args.allow_non_finite, progress=not args.no_progress
+    )
+    if args.json:
+        print(json.dumps([r.to_json() for r in reports], indent=2))
+    else:
+        print(format_table(reports))
+    return 0 if all(r.ok for r in reports) else 1
+
+
 _COMMANDS = {
     "info": _info,
     "compare": _compare,
@@ -328,6 +376,7 @@ _COMMANDS = {
     "add-pointcloud": _add_pointclouds,
     "view": _view,
     "tile-videos": _tile,
+    "verify": _verify,
 }
 
 

@@ -24,9 +24,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, first_line
 from rmb_lerobot.envs.registry import entry_for
 
 TORCH_THREADS = 1  # per stage process, unless OMP_NUM_THREADS is set
+
+# What a run writes into --out: one folder per stage, and the marker that says the directory is
+# this tool's (so a later run may replace those folders, and only those).
+STAGE_DIRS = ("rmb", "dataset", "train", "eval")
+MARKER = ".rmb-quickstart"
 
 # The LeRobot entry points, by their console-script names (what the printed commands show).
 LEROBOT_MODULES = {
@@ -237,29 +243,120 @@ def report(out: Path, timings: dict[str, float]) -> list[str]:
     return lines
 
 
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="rmb-quickstart", description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("outputs/quickstart"))
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``rmb-quickstart``."""
+    parser = argparse.ArgumentParser(
+        prog="rmb-quickstart",
+        description=first_line(__doc__),
+        formatter_class=DefaultsHelpFormatter,
+        epilog=f"--out holds one folder per stage ({', '.join(f'{s}/' for s in STAGE_DIRS)}) and "
+        f"a {MARKER} marker. A run into a directory made by an earlier rmb-quickstart replaces "
+        "those stage folders only; a non-empty directory it did not make is refused unless "
+        "--reuse-out is given, and nothing it did not create is ever deleted.",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("outputs/quickstart"),
+        help="output directory: demos, dataset, trained policy and evaluation, one folder each",
+    )
+    parser.add_argument(
+        "--reuse-out",
+        action="store_true",
+        help="use a non-empty --out that rmb-quickstart did not make (its files stay; refused if "
+        "it already holds a stage folder)",
+    )
     parser.add_argument("--env", default="insert", help="RMB env (short name, RMB name, type)")
     parser.add_argument("--episodes", type=int, default=30, help="demonstrations to collect")
-    parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
-    parser.add_argument("--image-size", nargs=2, type=int, default=[64, 64], metavar=("W", "H"))
-    parser.add_argument("--steps", type=int, default=1000, help="training steps")
-    parser.add_argument("--batch-size", type=int, default=8)
-    parser.add_argument("--eval-episodes", type=int, default=12)
     parser.add_argument(
-        "--episode-length", type=int, default=None, help="eval step limit (default: the task's)"
+        "--cameras", nargs="+", default=["front", "hand"], help="cameras recorded and trained on"
+    )
+    parser.add_argument(
+        "--image-size",
+        nargs=2,
+        type=int,
+        default=[64, 64],
+        metavar=("W", "H"),
+        help="image width and height of the demos, the policy and the evaluation",
+    )
+    parser.add_argument("--steps", type=int, default=1000, help="training steps")
+    parser.add_argument("--batch-size", type=int, default=8, help="training batch size")
+    parser.add_argument(
+        "--eval-episodes", type=int, default=12, help="evaluation episodes (lerobot-eval)"
+    )
+    parser.add_argument(
+        "--episode-length",
+        type=int,
+        default=None,
+        help="eval step limit (None: the task's own)",
     )
     parser.add_argument("--workers", type=int, default=2, help="processes for collect/convert/eval")
-    parser.add_argument("--seed", type=int, default=1)
-    return parser.parse_args(argv)
+    parser.add_argument(
+        "--seed", type=int, default=1, help="training seed (evaluation uses seed + 1000)"
+    )
+    return parser
+
+
+def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
+    """The options of ``rmb-quickstart``, parsed from ``argv`` (default: ``sys.argv``)."""
+    return build_parser().parse_args(argv)
+
+
+class OutDirError(ValueError):
+    """``--out`` cannot be used without deleting or mixing in files this tool did not create."""
+
+
+def prepare_out(out: Path, *, reuse: bool = False) -> None:
+    """Make ``out`` ready for a fresh run, deleting only what an earlier run of this tool made.
+
+    A new or empty directory gets the :data:`MARKER` file. A directory with the marker (an
+    earlier ``rmb-quickstart``'s) loses its stage folders (:data:`STAGE_DIRS`: LeRobot refuses
+    an existing output_dir) and keeps anything else. A non-empty directory without it is refused
+    unless ``reuse``; then it is used as it is, provided none of the stage folders is there.
+
+    Args:
+        out: The ``--out`` directory.
+        reuse: ``--reuse-out``: accept a non-empty directory this tool did not make.
+
+    Raises:
+        OutDirError: ``out`` is a file, or a non-empty directory not made by this tool (without
+            ``reuse``, or with a stage folder in it).
+    """
+    if out.exists() and not out.is_dir():
+        raise OutDirError(f"--out {out}: is a file, expected a directory")
+    marked = (out / MARKER).is_file()
+    if out.is_dir() and not marked and any(out.iterdir()):
+        if not reuse:
+            raise OutDirError(
+                f"--out {out}: not empty and not made by rmb-quickstart (no {MARKER} in it); "
+                "choose a new or empty directory, or pass --reuse-out to use it (nothing in it "
+                "is deleted)"
+            )
+        clashes = [name for name in STAGE_DIRS if (out / name).exists()]
+        if clashes:
+            raise OutDirError(
+                f"--out {out}: already holds {', '.join(clashes)}, which rmb-quickstart did not "
+                "make and would have to replace; choose another directory"
+            )
+    if marked:
+        for name in STAGE_DIRS:
+            if (out / name).is_dir():
+                shutil.rmtree(out / name)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / MARKER).write_text(
+        "Made by rmb-quickstart: a later run here replaces the folders "
+        f"{', '.join(STAGE_DIRS)} and nothing else.\n"
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = parse_args(argv)
-    stages = pipeline(args)
-    if args.out.exists():
-        shutil.rmtree(args.out)  # a fresh run: lerobot-train refuses an existing output_dir
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    stages = pipeline(args)  # an unknown env is refused before --out is touched
+    try:
+        prepare_out(args.out, reuse=args.reuse_out)
+    except OutDirError as error:
+        parser.error(str(error))
     timings = {}
     for index, stage in enumerate(stages, start=1):
         timings[stage.name] = run(stage, index, len(stages))

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 from tqdm import tqdm
 
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, apply_formatter
+
 DEFAULT_LISTEN = "unix:/tmp/rmb.sock"  # RMB's interactive demo uses this socket path
 
 
@@ -44,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="allow a non-loopback tcp address (the socket has no authentication)",
     )
-    return parser
+    return apply_formatter(parser, DefaultsHelpFormatter)
 
 
 def _parse_env(args: list[str]):

@@ -12,6 +12,7 @@ import json
 import sys
 from collections.abc import Sequence
 
+from rmb_lerobot.cli.help import DefaultsHelpFormatter, apply_formatter
 from rmb_lerobot.cli.rollout import DEFAULT_LISTEN
 from rmb_lerobot.rollout import protocol as P
 from rmb_lerobot.rollout.client import RolloutClient, RolloutError
@@ -40,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="seconds to wait for the server and for each reply (default: no limit)",
     )
-    return parser
+    return apply_formatter(parser, DefaultsHelpFormatter)
 
 
 def _print(reply: dict) -> None:

@@ -100,3 +100,29 @@ def test_sigterm_stops_the_running_cells_and_keeps_the_grid_resumable(tmp_path):
     assert driver.returncode == 128 + signal.SIGTERM, output
     assert "interrupted (SIGTERM)" in output
     assert not (out / "cells" / "collect" / "insert.json").exists()  # not recorded as done
+
+
+def test_no_arguments_prints_usage_and_runs_nothing(tmp_path, capsys, monkeypatch):
+    """A grid is hours of CPU: it needs a CONFIG or an explicit --example (issue 30)."""
+    import pytest
+
+    from rmb_lerobot.benchmark import runner
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(runner, "run_benchmark", lambda *a, **k: pytest.fail("a grid started"))
+    with pytest.raises(SystemExit) as info:
+        main([])
+    assert info.value.code == 2
+    error = capsys.readouterr().err
+    assert error.startswith("usage: rmb-benchmark")
+    assert "a grid needs a CONFIG file" in error and "--example" in error
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(SystemExit):
+        main([str(GRID_SMALL), "--example", "--dry-run"])
+    assert "not both" in capsys.readouterr().err
+
+
+def test_example_is_the_built_in_grid(tmp_path, capsys):
+    assert main(["--example", "--dry-run", "--out", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-1] == f"9 cells in {tmp_path}" and lines[0] == "[todo] collect/insert"

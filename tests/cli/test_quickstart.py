@@ -51,6 +51,7 @@ def test_an_unknown_env_is_refused_before_anything_runs(tmp_path):
     assert not (tmp_path / "qs").exists()
 
 
+@pytest.mark.timeout(1200)  # lerobot-train + lerobot-eval subprocesses: 140-160 s in CI
 def test_main_job_end_to_end_at_a_tiny_size(tmp_path, capsys):
     out = tmp_path / "qs"
 
@@ -68,3 +69,73 @@ def test_main_job_end_to_end_at_a_tiny_size(tmp_path, capsys):
     assert eval_info["overall"]["n_episodes"] == 1
     assert all(p.endswith(".mp4") for p in eval_info["overall"]["video_paths"])
     assert f"dataset:      {out / 'dataset'}" in printed
+
+
+# --out: never delete what rmb-quickstart did not create (issue 30).
+
+
+def _no_stages(monkeypatch) -> list[str]:
+    """Replace the stage runner and the summary, so main() only prepares --out."""
+    from rmb_lerobot.cli import quickstart
+
+    ran: list[str] = []
+    monkeypatch.setattr(quickstart, "run", lambda stage, index, total: ran.append(stage.name) or 0)
+    monkeypatch.setattr(quickstart, "report", lambda out, timings: [])
+    return ran
+
+
+def test_a_non_empty_out_it_did_not_make_is_refused_and_left_alone(tmp_path, capsys, monkeypatch):
+    ran = _no_stages(monkeypatch)
+    out = tmp_path / "mine"
+    (out / "train").mkdir(parents=True)
+    planted = out / "notes.txt"
+    planted.write_text("my notes")
+
+    with pytest.raises(SystemExit) as info:
+        main(["--out", str(out)])
+
+    assert info.value.code == 2 and ran == []
+    error = capsys.readouterr().err
+    assert f"--out {out}: not empty and not made by rmb-quickstart" in error
+    assert "--reuse-out" in error
+    assert planted.read_text() == "my notes" and (out / "train").is_dir()
+
+
+def test_a_rerun_into_its_own_out_replaces_only_its_stage_folders(tmp_path, monkeypatch):
+    ran = _no_stages(monkeypatch)
+    out = tmp_path / "qs"
+    assert main(["--out", str(out)]) == 0  # a new directory: made and marked
+    assert (out / ".rmb-quickstart").is_file() and len(ran) == 4
+    for stage in ("rmb", "dataset", "train", "eval"):
+        (out / stage / "sub").mkdir(parents=True)
+        (out / stage / "sub" / "old").write_text("earlier run")
+    planted = out / "notes.txt"
+    planted.write_text("my notes")
+    (out / "plots").mkdir()
+
+    assert main(["--out", str(out)]) == 0
+
+    assert planted.read_text() == "my notes" and (out / "plots").is_dir()
+    assert sorted(p.name for p in out.iterdir()) == [".rmb-quickstart", "notes.txt", "plots"]
+
+
+def test_reuse_out_uses_a_foreign_directory_without_deleting_anything(tmp_path, monkeypatch):
+    from rmb_lerobot.cli.quickstart import OutDirError, prepare_out
+
+    _no_stages(monkeypatch)
+    out = tmp_path / "shared"
+    out.mkdir()
+    planted = out / "notes.txt"
+    planted.write_text("my notes")
+
+    assert main(["--out", str(out), "--reuse-out"]) == 0
+    assert planted.read_text() == "my notes" and (out / ".rmb-quickstart").is_file()
+
+    other = tmp_path / "other"
+    (other / "dataset").mkdir(parents=True)  # a folder of the user's that a stage would replace
+    with pytest.raises(OutDirError, match=rf"--out {other}: already holds dataset"):
+        prepare_out(other, reuse=True)
+    assert (other / "dataset").is_dir()
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OutDirError, match="is a file, expected a directory"):
+        prepare_out(tmp_path / "file")

@@ -61,3 +61,79 @@ def test_errors_exit_2_with_the_reason(demos, tmp_path, capsys):
     assert main(bad_map) == 2
     assert "--key-map takes NAME=VALUE" in capsys.readouterr().err
     assert not (tmp_path / "ds").exists()
+
+
+# Issue 30: Hub failures in one line, HF_HUB_OFFLINE honoured, encoders quiet unless --verbose.
+
+
+def test_a_missing_dataset_offline_is_a_clear_error_without_network(
+    tmp_path, monkeypatch, capsys, no_network
+):
+    monkeypatch.setenv("HF_HUB_OFFLINE", "1")
+    code = main(["from-lerobot", "nobody/not_here", "--output", str(tmp_path / "out")])
+    assert code == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "Traceback" not in error
+    assert "dataset nobody/not_here is not in $HF_LEROBOT_HOME and HF_HUB_OFFLINE is set" in error
+    assert "--root" in error and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("failure", "why"),
+    [
+        ("connect", "the Hub could not be reached (ConnectError); check the network"),
+        ("404", "repository not found (404); check the id"),
+    ],
+)
+def test_a_hub_failure_is_one_line_saying_what_why_and_what_to_do(
+    tmp_path, monkeypatch, capsys, failure, why
+):
+    import httpx
+    from huggingface_hub.errors import RepositoryNotFoundError
+
+    from rmb_lerobot.converters import lerobot_to_rmb
+
+    def fail(repo_id, root):
+        request = httpx.Request("GET", f"https://huggingface.co/api/datasets/{repo_id}")
+        if failure == "connect":
+            raise httpx.ConnectError("[Errno -3] Temporary failure in name resolution")
+        response = httpx.Response(404, request=request)
+        raise RepositoryNotFoundError("404 Client Error. Repository Not Found", response=response)
+
+    monkeypatch.setattr(lerobot_to_rmb, "open_dataset", fail)
+    code = main(["from-lerobot", "someone/gone", "--output", str(tmp_path / "out")])
+    assert code == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "Traceback" not in error
+    assert error.startswith(
+        f"rmb-convert: error: downloading dataset someone/gone from the Hub failed: {why}"
+    )
+
+
+def test_a_failed_push_is_one_line_and_keeps_the_dataset(demos, tmp_path, monkeypatch, capsys):
+    import httpx
+
+    from rmb_lerobot import converters
+
+    def fail(*args, **kwargs):
+        request = httpx.Request("POST", "https://huggingface.co/api/repos/create")
+        raise httpx.HTTPStatusError("401", request=request, response=httpx.Response(401))
+
+    monkeypatch.setattr(converters, "push_dataset", fail)
+    args = ["to-lerobot", str(demos), "--repo-id", "someone/x", "--output", str(tmp_path / "ds")]
+    code = main([*args, "--video-codec", "h264", "--camera-names", "hand", "--push-to-hub"])
+    assert code == 1
+    error = capsys.readouterr().err  # the conversion's progress bars, then one line
+    assert "Traceback" not in error and error.splitlines()[-1].startswith("rmb-convert: error: ")
+    assert "rmb-convert: error:" not in "\n".join(error.splitlines()[:-1])
+    assert "pushing someone/x to the Hub failed: not authorised (401); log in with a token" in error
+    assert f"kept at {tmp_path / 'ds'}" in error and (tmp_path / "ds" / "meta").is_dir()
+
+
+@pytest.mark.parametrize("verbose", [False, True], ids=["quiet", "verbose"])
+def test_the_av1_encoder_is_quiet_unless_verbose(demos, tmp_path, monkeypatch, capfd, verbose):
+    monkeypatch.delenv("SVT_LOG", raising=False)  # restored (unset) after the test
+    args = ["to-lerobot", str(demos), "--output", str(tmp_path / "ds"), "--camera-names", "hand"]
+    code = main([*args, "--video-codec", "libsvtav1", *(["--verbose"] if verbose else [])])
+    assert code == 0
+    assert ("Svt[info]" in capfd.readouterr().err) == verbose

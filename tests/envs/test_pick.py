@@ -180,8 +180,8 @@ def test_expert_puts_the_named_object_in_the_named_basket(pick_env, run_expert, 
 
 
 def test_collect_can_cover_every_instruction_evenly(tmp_path):
-    # rmb-collect --cycle-instructions: each instruction in turn, across the worlds given
-    # (RMB's Pick dataset has the same number of demos per instruction).
+    # rmb-collect --cycle-instructions: each episode the next instruction, the worlds cycling
+    # alongside (RMB's Pick dataset has the same number of demos per instruction).
     config = CollectConfig(
         "pick", tmp_path, episodes=3, world_idx=(1, 4), cameras=(), cycle_variants=True
     )
@@ -190,7 +190,7 @@ def test_collect_can_cover_every_instruction_evenly(tmp_path):
     for result in sorted(results, key=lambda r: r.index):
         with open_episode(result.path) as episode:
             descriptions.append((episode.attrs["task_desc"], episode.attrs["world_idx"]))
-    assert descriptions == [(INSTRUCTIONS[0], 1), (INSTRUCTIONS[0], 4), (INSTRUCTIONS[1], 1)]
+    assert descriptions == [(INSTRUCTIONS[0], 1), (INSTRUCTIONS[1], 4), (INSTRUCTIONS[2], 1)]
 
 
 def test_cycling_instructions_of_a_task_without_any_is_refused(tmp_path):
