@@ -90,9 +90,3 @@ def interrupts_raise(on_repeat: Callable[[int], None] | None = None) -> Iterator
         for sig, old in previous.items():
             signal.signal(sig, old)
         _pending = None
-
-
-def exit_on_signal(signum: int, frame: object) -> None:
-    """Signal handler for worker processes: exit quietly (deferred while recording)."""
-    signal.signal(signum, signal.SIG_IGN)  # a second one must not cut the clean-up short
-    _note_or_raise(signum, SystemExit(128 + signum))
