@@ -238,18 +238,38 @@ ENVS: dict[str, EnvEntry] = {
         _tacto_entry("spoon", "TactoSpoonTask", "TactoSpoonExpert", TACTO_SPOON_FLOOR),
     )
 }
-"""Every environment by short name (:attr:`EnvEntry.name`): the source of truth for names."""
+"""Every simulated environment by short name (:attr:`EnvEntry.name`): the source of truth for
+names. Each has a scripted expert and a success test (the env contract tests run them all)."""
+
+_REAL_DEMO = "rmb_lerobot.envs.real.task:RealDemoTask"
+_NO_EXPERT = "rmb_lerobot.envs.real.task:NoExpert"
+
+REAL_ENVS: dict[str, EnvEntry] = {
+    entry.name: entry
+    for entry in (
+        EnvEntry("real", robot, "demo", _REAL_DEMO, _NO_EXPERT)
+        for robot in ("ur5e", "xarm7", "ur5e_dual")
+    )
+}
+"""RMB's real envs (``RealUR5eDemo``, ``RealXarm7Demo``, ``RealUR5eDualDemo``) by short name
+(``real_ur5e_demo``): a real robot (or its twins, ``driver: sim``) with the neutral demo task,
+no expert and no success test; kept apart from :data:`ENVS` so that nothing iterating the
+simulated envs starts a robot."""
+
+
+def _all_entries() -> list[EnvEntry]:
+    return [*ENVS.values(), *REAL_ENVS.values()]
 
 
 def entry_for(name: str) -> EnvEntry:
     """Look an env up by short name, RMB env name (with or without ``Env``), gymnasium id or
     LeRobot type."""
-    for entry in ENVS.values():
+    for entry in _all_entries():
         if name in (entry.name, entry.rmb_env_name, entry.env_attr, entry.gym_id):
             return entry
         if name == entry.lerobot_type:
             return entry
-    known = ", ".join(sorted(e.rmb_env_name for e in ENVS.values()))
+    known = ", ".join(sorted(e.rmb_env_name for e in _all_entries()))
     raise ValueError(f"unknown RMB environment {name!r}; known: {known}")
 
 
@@ -286,9 +306,10 @@ def make_env(task: str, max_episode_steps: int | None = None, **kwargs: Any) -> 
 
 
 def register_gym_envs() -> list[str]:
-    """Register every table entry with gymnasium (idempotent); returns the ids."""
+    """Register every table entry (simulated and real) with gymnasium (idempotent); returns
+    the ids."""
     ids = []
-    for entry in ENVS.values():
+    for entry in _all_entries():
         if entry.gym_id not in gym.registry:
             gym.register(
                 id=entry.gym_id,

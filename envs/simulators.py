@@ -1,4 +1,4 @@
-"""The simulators (and, later, real hardware) an env can run on: one record each.
+"""The simulators (and real hardware) an env can run on: one record each.
 
 A :class:`Simulator` names its backend class and that backend's typed options dataclass by
 ``"module:Class"`` (imported only when an env is made, so ``import rmb_lerobot`` stays free of
@@ -98,6 +98,14 @@ SIMULATORS: dict[str, Simulator] = {
             0.005 * 6,  # RMB: timestep 0.005 s, 6 substeps
             requires="pybullet",
             extra="pybullet",
+        ),
+        Simulator(
+            "real",
+            "Real",  # RMB's real envs: RealUR5eDemoEnv, RealXarm7DemoEnv, ...
+            "real_",
+            "rmb_lerobot.envs.real.backend:RealBackend",
+            "rmb_lerobot.envs.real.options:RealOptions",
+            0.02,  # RMB's RealEnvBase.dt: 50 Hz
         ),
     )
 }

@@ -289,6 +289,26 @@ class ArmSim:
                 ),
             )
 
+    def copy_state(self, out: mujoco.MjData) -> float:
+        """Copy the simulation state into ``out`` (a renderer's own data) under the stepping
+        lock, so that a camera never sees a half-stepped state and never holds the lock while
+        it renders.
+
+        Args:
+            out: Data made from :attr:`model`; its time, positions, velocities and controls
+                are overwritten (call ``mujoco.mj_forward`` on it before rendering).
+
+        Returns:
+            The simulated time of the copy (s).
+        """
+        d = self.data
+        with self._lock:
+            out.time = d.time
+            out.qpos[:] = d.qpos
+            out.qvel[:] = d.qvel
+            out.ctrl[:] = d.ctrl
+            return float(d.time)
+
     def at_rest(self, vel_tol: float = 0.02) -> bool:
         """Whether the arm is still: every joint slower than ``vel_tol`` rad/s and the target
         not moving.
