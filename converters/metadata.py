@@ -20,6 +20,7 @@ import numpy as np
 
 from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.converters.plan import ConversionPlan
+from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256
 
 SCHEMA_VERSION = 1
 
@@ -66,7 +67,11 @@ def rmb_metadata(plan: ConversionPlan) -> dict[str, Any]:
                 "source": ep.path.name,
                 "length": ep.length,
                 "measured_rate_hz": ep.measured_rate,
-                "attrs": {name: _jsonable(value) for name, value in ep.attrs.items()},
+                "attrs": {
+                    name: _jsonable(value)
+                    for name, value in ep.attrs.items()
+                    if name != ATTR_VIDEO_SHA256  # the source's files, not the dataset's
+                },
             }
             for index, ep in enumerate(plan.episodes)
         ],

@@ -8,7 +8,10 @@ their keys and image sizes agree, their attributes are valid (:mod:`.attrs`) and
 finite and within float32 (:mod:`.cast`). Each error names the file and the key.
 
 Every episode is opened with :func:`open_source`, which passes ``allow_non_finite`` on to the
-reader: by default an episode with NaN/inf in a low-dimensional key is refused.
+reader: by default an episode with NaN/inf in a low-dimensional key or an HDF5 depth image is
+refused. With ``--depth``, a camera of ``camera_names`` without the depth images other listed
+cameras have is refused too, naming the missing file, unless ``allow_missing_depth`` (then that
+camera's depth is left out, with a warning).
 """
 
 from __future__ import annotations
@@ -29,6 +32,8 @@ from rmb_lerobot.converters.rate import nominal_rate, same_rate
 from rmb_lerobot.converters.schema import DatasetSchema, build_schema
 from rmb_lerobot.envs.registry import robot_for_env_attr
 from rmb_lerobot.episode import Episode, open_episode
+from rmb_lerobot.episode import validate as V
+from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256
 from rmb_lerobot.episode.timing import control_rate
 from rmb_lerobot.errors import MissingKeyError, RmbFormatError
 
@@ -47,6 +52,7 @@ class ConvertOptions:
     fps: str | float | None = None  # None: from the `time` key (else `time` problems only warn)
     skip: int = 1
     allow_non_finite: bool = False  # keep NaN/inf in low-dim keys (stats ignore them)
+    allow_missing_depth: bool = False  # --depth: convert cameras whose depth file is missing
 
     def __post_init__(self) -> None:
         if self.skip < 1:
@@ -75,6 +81,7 @@ class ConversionPlan:
     env: str
     robot_type: str
     allow_non_finite: bool = False
+    allow_missing_depth: bool = True  # False: --depth without --allow-missing-depth
 
     @property
     def rate(self) -> Fraction:
@@ -86,13 +93,41 @@ class ConversionPlan:
         return sum(ep.length for ep in self.episodes)
 
 
-def open_source(path: str | Path, allow_non_finite: bool = False) -> Episode:
+def open_source(
+    path: str | Path, allow_non_finite: bool = False, allow_missing_depth: bool = True
+) -> Episode:
     """Open a source episode the way every step of a conversion must (plan, writers, workers).
 
-    The reader refuses NaN/inf in low-dimensional keys unless ``allow_non_finite``; the
-    converter checks again where values enter the dataset (:mod:`.cast`).
+    The reader refuses NaN/inf in low-dimensional keys and HDF5 depth unless
+    ``allow_non_finite``; the converter checks again where values enter the dataset
+    (:mod:`.cast`). Unless ``allow_missing_depth``, a listed camera missing the depth images
+    other cameras have is refused (what ``--depth`` needs, see :func:`missing_depth_allowed`).
     """
-    return open_episode(path, allow_non_finite=allow_non_finite)
+    return open_episode(
+        path, allow_non_finite=allow_non_finite, allow_missing_depth=allow_missing_depth
+    )
+
+
+def missing_depth_allowed(options: ConvertOptions) -> bool:
+    """Whether a camera's missing depth file may pass: without ``--depth`` no depth is
+    converted, so it does not matter; with it, only ``--allow-missing-depth`` lets it pass."""
+    return options.allow_missing_depth or not options.depth
+
+
+def _warn_missing_depth(episode: Episode, cameras: Sequence[str]) -> None:
+    """With ``--depth --allow-missing-depth``: say which listed cameras go without depth."""
+    if not episode.path.is_dir():
+        return  # single-file episodes have no files to lose
+    recorded = episode.video_digests if ATTR_VIDEO_SHA256 in episode.attrs else None
+    for key in V.cameras_missing_depth(episode.attrs, episode, recorded):
+        if K.camera_of(key) in cameras:
+            logger.warning(
+                "%s: camera %r has no depth images (expected %s); converted without its depth "
+                "(--allow-missing-depth)",
+                episode.path,
+                K.camera_of(key),
+                episode.path / f"{key}.rmb.mp4" if episode.path.is_dir() else repr(key),
+            )
 
 
 def robot_type_of(env: str) -> str:
@@ -245,12 +280,15 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         raise RmbFormatError("no episodes found (expected *.rmb directories or *.hdf5 files)")
     sources: list[EpisodeSource] = []
     checker: _Checker | None = None
+    allow_missing = missing_depth_allowed(options)
     for path in paths:
-        with open_source(path, options.allow_non_finite) as episode:
+        with open_source(path, options.allow_non_finite, allow_missing) as episode:
             attrs = checked_attrs(episode.attrs, episode.format.hdf5_path(episode.path))
             if checker is None:
                 checker = _Checker(episode, options)
             rate = checker.check(episode)
+            if options.depth:
+                _warn_missing_depth(episode, checker.cameras)
             converted = [k for k in checker.lowdim if not K.is_pointcloud_key(k)]
             _check_values(episode, converted, options.allow_non_finite)
             task = options.task or str(attrs.get(K.ATTR_TASK_DESC) or checker.env)
@@ -281,4 +319,5 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         env=checker.env,
         robot_type=robot_type_of(checker.env),
         allow_non_finite=options.allow_non_finite,
+        allow_missing_depth=allow_missing,
     )

@@ -140,7 +140,7 @@ def add_episode(
         )
     repaired = {N.depth_image_key(c): 0 for c in schema.depth_cameras}
     try:
-        with open_source(source.path, plan.allow_non_finite) as episode:
+        with open_source(source.path, plan.allow_non_finite, plan.allow_missing_depth) as episode:
             lowdim = {key: np.asarray(episode[key][:]) for key in schema.lowdim_keys}
             arrays = schema.episode_arrays(
                 lowdim, skip, path=source.path, allow_non_finite=plan.allow_non_finite

@@ -10,8 +10,9 @@ Allowed outcomes per case:
 - ``rejected``: an :class:`~rmb_lerobot.errors.RmbFormatError` naming the episode's file, and
   nothing at (or hidden beside) the conversion's destination;
 - ``accepted``: only for the classes whose handling is documented in the README ("Bad input"):
-  depth NaN/inf/negative stored as "no data", and MP4 damage that decodes to valid frames
-  (lossy video cannot tell a flipped coefficient from content);
+  negative depth stored as "no data", and MP4 damage that decodes to valid frames (lossy video
+  cannot tell a flipped coefficient from content; ``verify=True`` / ``rmb-data verify`` find it
+  through the recorded digests, which this user path does not check);
 - ``harmless``: accepted, and every low-dimensional key reads exactly as before the damage
   (the flipped bytes were unused ones, e.g. free space in an HDF5 header).
 Anything else (another exception type, a crash, a hang) fails.
@@ -193,14 +194,34 @@ def bad_fovy(episode: Path, rng: np.random.Generator) -> None:
         h5.attrs[K.fovy_attr("front")] = value
 
 
-def depth_nonfinite(episode: Path, rng: np.random.Generator) -> None:
+def _set_depth_pixel(episode: Path, rng: np.random.Generator, values: list[float]) -> None:
     key = K.depth_image_key("front")
     with h5py.File(_main(episode), "r+") as h5:
         depth = h5[key][()]
         depth[rng.integers(STEPS), rng.integers(SIZE[1]), rng.integers(SIZE[0])] = rng.choice(
-            [np.nan, np.inf, -1.0]
+            values
         )
         h5[key][...] = depth
+
+
+def depth_nonfinite(episode: Path, rng: np.random.Generator) -> None:
+    _set_depth_pixel(episode, rng, [np.nan, np.inf, -np.inf])
+
+
+def depth_negative(episode: Path, rng: np.random.Generator) -> None:
+    _set_depth_pixel(episode, rng, [-1.0])
+
+
+def flip_hdf5_data(episode: Path, rng: np.random.Generator) -> None:
+    """Flip bits in the stored data of a dataset (our files carry Fletcher-32 checksums)."""
+    path = _main(episode)
+    with h5py.File(path, "r") as h5:
+        key = str(rng.choice(sorted(h5)))
+        info = h5[key].id.get_chunk_info(int(rng.integers(h5[key].id.get_num_chunks())))
+    data = bytearray(path.read_bytes())
+    for _ in range(int(rng.integers(1, 4))):
+        data[info.byte_offset + int(rng.integers(info.size))] ^= 1 << int(rng.integers(8))
+    path.write_bytes(bytes(data))
 
 
 Corruption = Callable[[Path, np.random.Generator], None]
@@ -227,7 +248,10 @@ CLASSES: list[tuple[str, Corruption, str, frozenset[str], int]] = [
     ("depth_in_millimetres", depth_in_millimetres, "hdf5", frozenset({"rejected"}), 1),
     ("depth_video_as_rgb", depth_video_as_rgb, "rmb", frozenset({"rejected"}), 1),
     ("bad_fovy", bad_fovy, "rmb", frozenset({"rejected"}), 3),
-    ("depth_nonfinite", depth_nonfinite, "hdf5", frozenset({"accepted"}), 2),
+    ("depth_nonfinite", depth_nonfinite, "hdf5", frozenset({"rejected"}), 2),
+    ("depth_negative", depth_negative, "hdf5", frozenset({"accepted"}), 1),
+    ("flip_hdf5_data_compact", flip_hdf5_data, "rmb", frozenset({"rejected"}), 4),
+    ("flip_hdf5_data_single", flip_hdf5_data, "hdf5", frozenset({"rejected"}), 4),
 ]
 CASES = [
     pytest.param(name, corrupt, variant, allowed, index, id=f"{name}-{index}")

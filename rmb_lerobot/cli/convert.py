@@ -48,8 +48,8 @@ def _add_allow_non_finite(parser) -> None:
     parser.add_argument(
         "--allow-non-finite",
         action="store_true",
-        help="keep NaN/inf in low-dimensional data instead of refusing the episode (statistics "
-        "then describe the finite values only)",
+        help="keep NaN/inf in low-dimensional data and in depth images instead of refusing the "
+        "episode (statistics then describe the finite values only; depth is stored clamped)",
     )
 
 

@@ -30,9 +30,9 @@ rmb-data view EPISODE                     the episode in the rerun viewer (Visua
 rmb-data tile-videos DIR --out FILE       lerobot-eval's rollout videos tiled (TileRolloutVideos)
 rmb-data verify PATH...                   read every byte, report corruption (exit code 1 if any)
 
-Exit codes: 0 done; 1 compare found differences beyond the tolerances, or info met
-unreadable episodes, or verify found a problem; 2 bad input (the message names the file and key); 128 + signal when
-interrupted (files being written are discarded, existing ones stay as they were).
+Exit codes: 0 done; 1 compare found differences beyond the tolerances, info met unreadable
+episodes, or verify found a problem; 2 bad input (the message names the file and key); 128 +
+signal when interrupted (files being written are discarded, existing ones stay as they were).
 """
 
 
@@ -75,7 +75,7 @@ def _add_compare(sub) -> None:
         action="append",
         default=[],
         metavar="NAME",
-        help="attribute not to compare (repeatable; 'format' always)",
+        help="attribute not to compare (repeatable; 'format' and 'video_sha256' always)",
     )
     p.add_argument("--failures-only", action="store_true", help="list only keys beyond tolerances")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")

@@ -212,6 +212,11 @@ class VideoFrameReader:
     def height(self) -> int:
         return self._size[1]
 
+    @property
+    def time_base(self) -> Fraction:
+        """Seconds per timestamp unit of the stream (a frame's time is ``pts * time_base``)."""
+        return self._stream.time_base
+
     def frames(self, index: FrameIndex) -> av.VideoFrame | list[av.VideoFrame]:
         """Frame(s) at ``index`` (int, slice, list or int array; negative counts from the end)."""
         positions, single = resolve_index(index, len(self))

@@ -186,7 +186,9 @@ def add_pointclouds(
                 raw[key] = key + RAW_SUFFIX in episode
         with edit_hdf5(path, drop=clouds) as h5:
             for key, data in clouds.items():
-                h5.create_dataset(key, data=data)
+                # Fletcher-32 as every dataset the episode writer creates: HDF5 verifies it on
+                # every read, so a flipped byte is an error, not a wrong point.
+                h5.create_dataset(key, data=data, fletcher32=True)
                 h5.attrs[key + "_image_size"] = np.array(
                     [-1, -1] if raw[key] else list(size), dtype=np.int64
                 )

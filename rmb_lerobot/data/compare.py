@@ -28,9 +28,11 @@ from tqdm import tqdm
 from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth_base import MAX_DEPTH_MM
 from rmb_lerobot.episode import open_episode
+from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256
 
 _CHUNK = 8  # frames per read; two 640x480 two-camera episodes peak at 0.24 GB RSS
-IGNORED_ATTRS = (K.ATTR_FORMAT,)
+# The digests describe the bytes of each episode's own video files (re-encoding changes them).
+IGNORED_ATTRS = (K.ATTR_FORMAT, ATTR_VIDEO_SHA256)
 
 
 @dataclass(frozen=True)
@@ -178,8 +180,8 @@ def compare_episodes(
 ) -> Comparison:
     """Compare every key and attribute of two episodes; see the module documentation."""
     with (
-        open_episode(path_a, allow_non_finite=True) as a,
-        open_episode(path_b, allow_non_finite=True) as b,
+        open_episode(path_a, allow_non_finite=True, allow_missing_depth=True) as a,
+        open_episode(path_b, allow_non_finite=True, allow_missing_depth=True) as b,
     ):
         result = Comparison(Path(path_a), Path(path_b), (len(a), len(b)))
         if len(a) != len(b):

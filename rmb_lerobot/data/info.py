@@ -89,7 +89,7 @@ def _key_info(series, key: str, image_stats: bool) -> dict[str, Any]:
 
 def episode_info(path: str | Path, *, image_stats: bool = False) -> dict[str, Any]:
     """Everything :func:`format_info` prints about one episode, as JSON-ready data."""
-    with open_episode(path, allow_non_finite=True) as episode:
+    with open_episode(path, allow_non_finite=True, allow_missing_depth=True) as episode:
         info: dict[str, Any] = {
             "path": str(path),
             "format": episode.format.value,

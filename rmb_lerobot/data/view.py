@@ -229,7 +229,9 @@ def view_episode(
         save = Path(save)
         if save.suffix != ".rrd":
             raise RmbFormatError("the recording must be saved as a .rrd file", path=save)
-    with open_episode(path, image_size=image_size, allow_non_finite=True) as episode:
+    with open_episode(
+        path, image_size=image_size, allow_non_finite=True, allow_missing_depth=True
+    ) as episode:
         rec = rr.RecordingStream("rmb-data view", recording_id=str(path.resolve()))
         if save is None:
             rec.spawn()

@@ -19,7 +19,11 @@ the slice data of lossy RGB (a residual coefficient, a motion vector, a quantise
 the lossless videoio depth (whose error then stays in the Y/V planes, metres off where the
 high byte is hit), and flips in the codec parameters in the ``avcC`` box (e.g. the initial
 quantiser) are of that kind. Flips in bytes no decoder reads (metadata, the encoder's
-settings string) change nothing. ``rmbz`` depth files checksum every byte.
+settings string) change nothing. ``rmbz`` depth files checksum every byte. Episodes this
+package writes record each video's SHA-256 (``video_sha256``), checked on demand
+(``verify=True``, ``rmb-data verify``), and store every HDF5 dataset with HDF5's Fletcher-32
+filter, which HDF5 checks on every read: a flipped byte in their data is an error, where in a
+file of the original RMB (no checksums) it silently changes a value or an image.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth import DEPTH_CODECS, find_depth_file, mm_to_metres
 from rmb_lerobot.codecs.video import RgbVideoReader
 from rmb_lerobot.episode import validate as V
+from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256, check_digests, parse_digests
 from rmb_lerobot.episode.layout import (
     RGB_VIDEO_SUFFIX,
     EpisodeFormat,
@@ -149,8 +154,15 @@ class Episode:
     Low-dimensional float keys holding NaN or +-inf raise :class:`RmbFormatError` when read
     (naming the first such step), unless ``allow_non_finite=True``: RMB data is finite (its
     real envs refuse non-finite commands), so such values mean a broken sensor or writer.
-    Depth images and point clouds are not checked: NaN, inf and negative depths mean "no
-    data" (depth videos store them as 0; HDF5 depth is returned as stored).
+    HDF5 depth images holding NaN or +-inf are refused the same way (naming the frame and
+    counting the pixels); depth videos cannot hold them. Zero and negative depths mean "no
+    data" and are returned as stored. Point clouds are not checked.
+
+    Cameras: every name in ``camera_names``, ``rgb_tactile_names`` and
+    ``pointcloud_camera_names`` needs RGB images, every point-cloud camera depth, and when any
+    camera of ``camera_names`` has depth, all of them must (``allow_missing_depth=True``
+    reads such an episode without the missing depth). ``verify=True`` compares the video
+    files with the SHA-256 digests the writer recorded (:meth:`verify_digests`).
     """
 
     def __init__(
@@ -161,12 +173,15 @@ class Episode:
         cache: bool = False,
         depth_interpolation: int = cv2.INTER_NEAREST,
         allow_non_finite: bool = False,
+        allow_missing_depth: bool = False,
+        verify: bool = False,
     ):
         self.path = Path(path)
         self.format = episode_format(self.path)
         self.image_size = None if image_size is None else (int(image_size[0]), int(image_size[1]))
         self.cache = cache
         self.allow_non_finite = allow_non_finite
+        self.allow_missing_depth = allow_missing_depth
         self._depth_interpolation = depth_interpolation
         self._cached: dict[str, np.ndarray] = {}
         self._open_series: list[VideoSeries] = []
@@ -183,6 +198,8 @@ class Episode:
             ) from exc
         try:
             self._open()
+            if verify:
+                self.verify_digests()
         except BaseException:
             self._h5.close()
             raise
@@ -224,6 +241,12 @@ class Episode:
     def _check_listed_cameras(self) -> None:
         """Every camera the attributes list must have its images (see validate)."""
         missing = V.check_names_have_images(self.attrs, self)
+        if not missing and not self.allow_missing_depth and self.format is EpisodeFormat.COMPACT:
+            recorded = self.video_digests if ATTR_VIDEO_SHA256 in self.attrs else None
+            missing = [
+                (K.ATTR_CAMERA_NAMES, K.camera_of(key), key)
+                for key in V.cameras_missing_depth(self.attrs, self, recorded)
+            ]
         if not missing:
             return
         attr, camera, key = missing[0]
@@ -237,9 +260,15 @@ class Episode:
         else:
             expected = self._h5_path
             where = f"expected a dataset {key!r} in this file"
+        others = ""
+        if attr == K.ATTR_CAMERA_NAMES and not K.is_rgb_image_key(key):
+            others = (
+                " (the file was recorded, or other listed cameras have depth; to go on without "
+                "this camera's depth: allow_missing_depth=True, --allow-missing-depth)"
+            )
         raise MissingKeyError(
             f"camera {camera!r} is listed in the {attr!r} attribute but has no {kind} images: "
-            f"{where}",
+            f"{where}{others}",
             path=expected,
             key=key,
         )
@@ -329,7 +358,13 @@ class Episode:
         if K.is_rgb_image_key(key) and self.image_size:
             return H5Series(dataset, self._h5_path, self._rgb_transform)
         if K.is_depth_image_key(key):
-            return H5Series(dataset, self._h5_path, self._depth_transform_metres)
+            depth_check = None
+            if not self.allow_non_finite:
+
+                def depth_check(data: np.ndarray, index: Index) -> None:
+                    V.check_finite_depth(data, index, len(dataset), self._h5_path, key)
+
+            return H5Series(dataset, self._h5_path, self._depth_transform_metres, check=depth_check)
         check = None
         if dataset.dtype.kind == "f" and not K.is_pointcloud_key(key) and not self.allow_non_finite:
 
@@ -376,6 +411,33 @@ class Episode:
         # Nearest neighbour: linear interpolation would invent depths between foreground and
         # background (flying pixels) and smear "no data" zeros.
         return _resize(depth, self.image_size, self._depth_interpolation)
+
+    @property
+    def video_digests(self) -> dict[str, str]:
+        """Video file name -> SHA-256 recorded when the episode was written (empty if none).
+
+        Raises:
+            RmbFormatError: The ``video_sha256`` attribute is malformed.
+        """
+        if ATTR_VIDEO_SHA256 not in self.attrs:
+            return {}
+        return parse_digests(self.attrs[ATTR_VIDEO_SHA256], self._h5_path)
+
+    def verify_digests(self) -> int:
+        """Hash every video file whose digest the writer recorded and compare.
+
+        Episodes written by the original RMB (or single-file ones) record none: nothing is
+        checked for them. HDF5 data needs no such step: its checksums are verified on read.
+
+        Returns:
+            The number of files checked.
+
+        Raises:
+            RmbFormatError: A file differs from what was written or is missing (named).
+        """
+        digests = self.video_digests
+        check_digests(self.path, digests)
+        return len(digests)
 
     def validate(self, *, frames: bool = False) -> None:
         """Check all that is cheap to check; raise :class:`RmbFormatError` at the first fault.
@@ -435,15 +497,27 @@ def open_episode(
     image_size: tuple[int, int] | None = None,
     cache: bool = False,
     allow_non_finite: bool = False,
+    allow_missing_depth: bool = False,
+    verify: bool = False,
 ) -> Episode:
     """Open an RMB episode (``.rmb`` directory or ``.hdf5`` file) for reading.
 
     ``image_size=(width, height)`` resizes images on read (like RMB's loader); ``cache=True``
     keeps every key read in RAM; ``allow_non_finite=True`` returns NaN/inf in low-dimensional
-    keys instead of raising (see :class:`Episode`). Raises :class:`RmbFormatError` for data
-    that breaks the RMB format (see the module documentation).
+    and depth images instead of raising (see :class:`Episode`). A camera of ``camera_names``
+    without depth images while other listed cameras have them is refused (naming the missing
+    file) unless ``allow_missing_depth=True``. ``verify=True`` hashes every video file whose
+    SHA-256 the writer recorded and compares (:meth:`Episode.verify_digests`). Raises
+    :class:`RmbFormatError` for data that breaks the RMB format (see the module documentation).
     """
-    return Episode(path, image_size=image_size, cache=cache, allow_non_finite=allow_non_finite)
+    return Episode(
+        path,
+        image_size=image_size,
+        cache=cache,
+        allow_non_finite=allow_non_finite,
+        allow_missing_depth=allow_missing_depth,
+        verify=verify,
+    )
 
 
 def find_episodes(*sources: str | Path) -> list[Path]:

@@ -9,7 +9,7 @@ converter's float32 cast has its own check (:mod:`rmb_lerobot.converters.cast`).
 
 from __future__ import annotations
 
-from collections.abc import Container
+from collections.abc import Container, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -341,3 +341,71 @@ def check_names_have_images(
                 wanted.append(K.depth_image_key(camera))
             missing += [(attr, camera, key) for key in wanted if key not in present]
     return missing
+
+
+def check_finite_depth(data: np.ndarray, index: Any, length: int, path: Path, key: str) -> None:
+    """Raise unless every depth pixel read is finite; names the first bad frame and counts.
+
+    RMB's depth is finite metres with 0 for "no data" (its videos cannot even hold NaN), so a
+    NaN or an infinity in an HDF5 depth image means a broken sensor or writer; before this
+    check it reached a converted dataset as the near end of LeRobot's depth range.
+
+    Args:
+        data: Depth images as read, ``(H, W)`` for one frame or ``(N, H, W)``.
+        index: The index they were read with (to name the frame).
+        length: Frames in the episode.
+        path: The HDF5 file, for the message.
+        key: The depth key, for the message.
+
+    Raises:
+        RmbFormatError: Some pixel is NaN or infinite.
+    """
+    finite = np.isfinite(data)
+    if finite.all():
+        return
+    single = isinstance(index, int | np.integer)
+    rows = 1 if single else len(data)
+    bad = (~finite).reshape(rows, -1).sum(axis=1)
+    row = int(np.flatnonzero(bad)[0])
+    frame = int(_steps_of(index, length, rows)[row])
+    values = data.reshape(rows, -1)[row][~finite.reshape(rows, -1)[row]]
+    kinds = ", ".join(sorted({"NaN" if np.isnan(v) else f"{v}" for v in values.tolist()}))
+    frames = int(np.count_nonzero(bad))
+    more = f"; {frames} of the frames read hold such pixels" if frames > 1 else ""
+    raise RmbFormatError(
+        f"depth frame {frame} holds {int(bad[row])} non-finite pixels ({kinds}){more}; RMB depth "
+        "must be finite metres, 0 for no data (to keep them: allow_non_finite=True, "
+        "--allow-non-finite)",
+        path=path,
+        key=key,
+    )
+
+
+def cameras_missing_depth(
+    attrs: dict[str, Any], present: Container[str], recorded: Iterable[str] | None = None
+) -> list[str]:
+    """Depth keys of a compact episode whose video file was lost.
+
+    With ``recorded`` (the file names of the ``video_sha256`` attribute: this package's
+    writer lists every file it wrote), each recorded depth file must be there. Without it (the
+    original RMB), RMB's recorder writes depth for every camera of ``camera_names`` or for none
+    (an env records with or without depth): a listed camera lacking depth beside others that
+    have it is a lost file, not a choice. (Episodes converted from LeRobot datasets may have
+    depth for some cameras only; they carry ``recorded``.)
+
+    Args:
+        attrs: The episode's decoded attributes.
+        present: The episode's keys.
+        recorded: The video files the writer recorded, if it did.
+
+    Returns:
+        The depth keys missing, in ``camera_names`` (or file name) order.
+    """
+    if recorded is not None:
+        stems = [name.split(".", 1)[0] for name in recorded]
+        return [s for s in sorted(stems) if K.is_depth_image_key(s) and s not in present]
+    cameras = attrs.get(K.ATTR_CAMERA_NAMES, [])
+    wanted = [K.depth_image_key(camera) for camera in cameras]
+    if not any(key in present for key in wanted):
+        return []
+    return [key for key in wanted if key not in present]

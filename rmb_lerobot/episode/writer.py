@@ -2,12 +2,16 @@
 
 The writer streams images to their final encoding as steps arrive (video encoders for the
 compact variant, per-frame HDF5 chunks for the single-file variant), so a long episode never
-sits in RAM. Everything is written to a hidden temporary sibling
-(:class:`~rmb_lerobot.staging.Staging`) and moved into place only when
-:meth:`EpisodeWriter.close` succeeds: an exception, Ctrl-C or a crash leaves no episode at the
-destination, and the temporary of a writer whose process died is recognised as stale by
-:func:`~rmb_lerobot.staging.remove_stale` (its lock is free). Temporaries of older versions of
-this writer carry no lock; see :func:`remove_legacy_temporaries`.
+sits in RAM. Every HDF5 dataset is stored with HDF5's Fletcher-32 checksum filter (chunked, no
+compression: any HDF5 reader, the original RMB's included, reads it and fails on a damaged
+chunk instead of returning wrong values), and a compact episode records the SHA-256 of each
+of its video files in the ``video_sha256`` attribute (:mod:`rmb_lerobot.episode.digest`).
+
+Everything is written to a hidden temporary sibling (:class:`~rmb_lerobot.staging.Staging`)
+and moved into place only when :meth:`EpisodeWriter.close` succeeds: an exception, Ctrl-C or
+a crash leaves no episode at the destination, and the temporary of a writer whose process died
+is recognised as stale by :func:`~rmb_lerobot.staging.remove_stale` (its lock is free).
+Temporaries of older versions of this writer carry no lock; see :func:`remove_legacy_temporaries`.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import numpy as np
 from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth import get_depth_codec, metres_to_mm, mm_to_metres
 from rmb_lerobot.codecs.video import RgbVideoWriter
+from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256, format_digests
 from rmb_lerobot.episode.layout import EpisodeFormat, episode_format, rgb_video_path
 from rmb_lerobot.errors import RmbFormatError
 from rmb_lerobot.pose import relative_pose_sequence
@@ -110,6 +115,7 @@ class EpisodeWriter:
         self._lowdim: dict[str, list[np.ndarray]] = {}
         self._shapes: dict[str, tuple[tuple[int, ...], np.dtype]] = {}
         self._encoders: dict[str, Any] = {}  # compact: image key -> video writer
+        self._video_files: list[Path] = []  # compact: the finished videos, for their digests
         self._h5: h5py.File | None = None  # single file: open from the start for image chunks
         self._num_steps = 0
         # The hidden temporary, locked for as long as this process records into it.
@@ -235,6 +241,7 @@ class EpisodeWriter:
                 maxshape=(None, *image.shape),
                 dtype=image.dtype,
                 chunks=(1, *image.shape),
+                fletcher32=True,
             )
         dataset.resize(self._num_steps + 1, axis=0)
         dataset[self._num_steps] = image
@@ -276,6 +283,9 @@ class EpisodeWriter:
         cameras = list(dict.fromkeys(K.camera_of(k) for k in self._shapes if K.is_image_key(k)))
         attrs[K.ATTR_CAMERA_NAMES] = cameras
         attrs.update(self.attrs)
+        attrs.pop(ATTR_VIDEO_SHA256, None)  # another episode's digests (copied attributes)
+        if self.format is EpisodeFormat.COMPACT:
+            attrs[ATTR_VIDEO_SHA256] = format_digests(self._video_files)
         attrs[K.ATTR_VERSION] = self.attrs.get(K.ATTR_VERSION, K.RMB_FORMAT_VERSION)
         attrs[K.ATTR_FORMAT] = self.format.value
         for camera in cameras:
@@ -295,6 +305,7 @@ class EpisodeWriter:
         try:
             for encoder in self._encoders.values():
                 encoder.close()
+            self._video_files = [Path(encoder.path) for encoder in self._encoders.values()]
             self._encoders.clear()
             data = {key: np.stack(values) for key, values in self._lowdim.items()}
             data.update(self._derived_keys(data))
@@ -305,7 +316,7 @@ class EpisodeWriter:
             )
             with h5:
                 for key, values in data.items():
-                    h5.create_dataset(key, data=values)
+                    h5.create_dataset(key, data=values, fletcher32=True)
                 for name, value in self._final_attrs().items():
                     h5.attrs[name] = _encode_attr(value)
             self._h5 = None

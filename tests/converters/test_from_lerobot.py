@@ -34,6 +34,8 @@ def test_round_trip_restores_every_key_and_attribute(demos, round_trip, psnr):
             assert sorted(a.keys()) == sorted(b.keys())
             assert a.attrs.keys() == b.attrs.keys()
             for name, value in a.attrs.items():
+                if name == "video_sha256":  # the digests of each episode's own video files
+                    continue
                 assert np.array_equal(np.asarray(value), np.asarray(b.attrs[name])), name
             for key in a:
                 x, y = np.asarray(a[key][:]), np.asarray(b[key][:])

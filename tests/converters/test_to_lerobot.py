@@ -185,7 +185,9 @@ def test_each_video_states_the_true_frame_rate(converted_depth):
 
 
 def test_depth_stats_describe_the_stored_clamped_depth(tmp_path, record, caplog):
-    """Beyond LeRobot's depth range (10 m) values are stored clamped; stats must say so."""
+    """Beyond LeRobot's depth range (10 m) values are stored clamped; stats must say so.
+
+    NaN/inf depth is refused by default (test_depth_checks.py); kept, it is stored clamped."""
     episode = record(tmp_path / "src" / "far.hdf5")
     with h5py.File(episode, "r+") as h5:
         depth = h5["front_depth_image"][()]
@@ -194,7 +196,7 @@ def test_depth_stats_describe_the_stored_clamped_depth(tmp_path, record, caplog)
         depth[5, 0, 0] = np.nan
         h5["front_depth_image"][...] = depth
     root = tmp_path / "ds"
-    options = ConvertOptions(camera_names=("front",), depth=True)
+    options = ConvertOptions(camera_names=("front",), depth=True, allow_non_finite=True)
     to_lerobot([episode.parent], output=root, options=options, video_codec="h264", progress=False)
     key = N.depth_image_key("front")
     stats = json.loads((root / "meta" / "stats.json").read_text())[key]

@@ -71,14 +71,35 @@ def test_cached_episodes_check_too(nan_episode):
         ep["measured_joint_pos"]
 
 
-def test_depth_images_are_not_checked_for_finiteness(tmp_path, record):
-    """Depth's NaN/inf mean "no data" (0 once in a depth video); they are not an error."""
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_depth_is_refused_with_frame_and_pixel_count(tmp_path, record, bad):
+    """RMB depth is finite metres (0 = no data): NaN/inf in HDF5 depth is a broken writer."""
     path = record(tmp_path / "demo.hdf5")
     depth = stored(path, "front_depth_image")
-    depth[3, 0, 0] = np.nan
+    depth[3, 0, :2] = bad
+    depth[7, 1, 1] = bad
     replace_dataset(path, "front_depth_image", depth)
     with open_episode(path) as ep:
-        assert np.isnan(ep["front_depth_image"][3][0, 0])
+        assert ep["front_depth_image"][2:3].shape[0] == 1  # finite frames read fine
+        with pytest.raises(
+            RmbFormatError, match=r"depth frame 3 holds 2 non-finite pixels"
+        ) as info:
+            ep["front_depth_image"][:]
+        assert "2 of the frames read" in str(info.value)
+        assert info.value.key == "front_depth_image" and info.value.path == path
+        with pytest.raises(RmbFormatError, match=r"depth frame 7 holds 1 non-finite pixels"):
+            ep["front_depth_image"][7]
+    with open_episode(path, allow_non_finite=True) as ep:
+        assert not np.isfinite(ep["front_depth_image"][3][0, 0])
+
+
+def test_negative_depth_still_means_no_data(tmp_path, record):
+    path = record(tmp_path / "demo.hdf5")
+    depth = stored(path, "front_depth_image")
+    depth[3, 0, 0] = -1.0
+    replace_dataset(path, "front_depth_image", depth)
+    with open_episode(path) as ep:
+        assert ep["front_depth_image"][3][0, 0] == -1.0
 
 
 # ---------------------------------------------------------------- cameras without images
@@ -101,12 +122,43 @@ def test_a_listed_camera_without_rgb_dataset_is_refused_at_open(tmp_path, record
         open_episode(path)
 
 
-def test_depth_is_optional_for_listed_cameras(tmp_path, record):
-    path = record(tmp_path / "demo.rmb")
+@pytest.mark.parametrize("writer", ["ours", "original"])
+def test_a_lost_depth_video_is_refused(tmp_path, record, steps, attrs, write_like_original, writer):
+    """Ours: the file is in the recorded digests; the original's: other cameras have depth."""
+    if writer == "ours":
+        path = record(tmp_path / "demo.rmb")
+    else:
+        path = write_like_original(tmp_path / "demo.rmb", steps, attrs)
     (path / "hand_depth_image.rmb.mp4").unlink()
-    with open_episode(path) as ep:
+    with pytest.raises(MissingKeyError, match=r"camera 'hand' .* no depth images") as info:
+        open_episode(path)
+    assert "allow_missing_depth=True" in str(info.value)
+    assert info.value.key == "hand_depth_image"
+    assert info.value.path == path / "hand_depth_image.rmb.mp4"
+    with open_episode(path, allow_missing_depth=True) as ep:
         assert ep.camera_names == ["front", "hand"]
-        assert "hand_depth_image" not in ep
+        assert "hand_depth_image" not in ep and "front_depth_image" in ep
+
+
+def test_depth_of_some_cameras_only_is_fine_when_so_recorded(tmp_path, steps, attrs):
+    """Episodes converted from LeRobot datasets may have depth for some cameras only."""
+    from rmb_lerobot import EpisodeWriter
+
+    for variant in ("rmb", "hdf5"):
+        path = tmp_path / f"partial.{variant}"
+        with EpisodeWriter(path, attrs) as writer:
+            for step in steps:
+                writer.append({k: v for k, v in step.items() if k != "hand_depth_image"})
+        with open_episode(path) as ep:
+            assert "hand_depth_image" not in ep and "front_depth_image" in ep
+
+
+def test_depth_may_be_absent_for_every_camera(tmp_path, steps, attrs, write_like_original):
+    """The original RMB records depth for every listed camera or for none."""
+    no_depth = [{k: v for k, v in s.items() if not k.endswith("_depth_image")} for s in steps]
+    path = write_like_original(tmp_path / "demo.rmb", no_depth, attrs)
+    with open_episode(path) as ep:
+        assert not any(k.endswith("_depth_image") for k in ep)
 
 
 def test_point_cloud_cameras_need_depth(tmp_path, record):
