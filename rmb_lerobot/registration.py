@@ -3,8 +3,9 @@
 LeRobot's CLIs call ``register_third_party_plugins()``, which imports every installed
 distribution whose name starts with ``lerobot_env_``; ours is ``lerobot_env_rmb`` and its
 import calls :func:`register_all`. Modules listed here register LeRobot ``EnvConfig`` /
-``PreTrainedConfig`` subclasses (``@EnvConfig.register_subclass(...)``) when imported, so adding
-an env family or a policy means adding its module name to one of these tuples.
+``PreTrainedConfig`` / ``RobotConfig`` / ``TeleoperatorConfig`` / ``CameraConfig`` subclasses
+(``@EnvConfig.register_subclass(...)``) when imported, so adding an env family, a policy or a
+device means adding its module name to one of these tuples.
 """
 
 from __future__ import annotations
@@ -13,6 +14,12 @@ import importlib
 
 # Modules whose import registers LeRobot env types (``--env.type=rmb_...``).
 ENV_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.envs.lerobot_config",)
+# Modules whose import registers LeRobot robot, teleoperator and camera types
+# (``--robot.type=rmb_ur5e``, ``--teleop.type=rmb_scripted``, camera ``type: rmb_twin``).
+DEVICE_CONFIG_MODULES: tuple[str, ...] = (
+    "rmb_lerobot.envs.real.lerobot_devices",
+    "rmb_lerobot.envs.real.cameras.config_twin",
+)
 # Modules whose import registers LeRobot policy types (``--policy.type=...``).
 POLICY_CONFIG_MODULES: tuple[str, ...] = (
     "rmb_lerobot.policies_extra.mlp.configuration_mlp",
@@ -29,6 +36,7 @@ ENV_TYPE_PREFIX = "rmb_"
 def register_all(
     env_modules: tuple[str, ...] = ENV_CONFIG_MODULES,
     policy_modules: tuple[str, ...] = POLICY_CONFIG_MODULES,
+    device_modules: tuple[str, ...] = DEVICE_CONFIG_MODULES,
 ) -> list[str]:
     """Import every registering module (idempotent); returns the module names imported.
 
@@ -36,7 +44,7 @@ def register_all(
     here is what makes a broken registration visible in our own tests.
     """
     imported = []
-    for name in (*env_modules, *policy_modules):
+    for name in (*env_modules, *policy_modules, *device_modules):
         importlib.import_module(name)
         imported.append(name)
     return imported

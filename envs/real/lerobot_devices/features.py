@@ -1,0 +1,78 @@
+"""The LeRobot keys of the real-arm plugins, from the robot records.
+
+Per arm, in RMB's joint-vector order: ``<joint>.pos`` for each arm joint, then
+``gripper.pos`` (the gripper in its command units, 0 open .. 255 closed); the dual UR5e
+prefixes one arm's keys ``left_`` and the other's ``right_``, as LeRobot's bimanual robots do.
+Observation and action use the same names, and no other key ends in ``.pos`` / ``.vel``:
+``lerobot-rollout`` feeds a policy only those keys (and cameras) and returns the arm to the
+``.pos`` values it started at.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rmb_lerobot.envs.real.lerobot_devices.config import ROBOT_TYPES
+from rmb_lerobot.envs.robots import UR5E, Robot, robot_for
+
+GRIPPER_KEY = "gripper.pos"
+DUAL_SIDES = ("left", "right")
+
+
+def single_arm_record(robot_type: str) -> Robot:
+    """The single-arm record an arm of ``robot_type`` is driven as.
+
+    Args:
+        robot_type: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual`` (each of its arms is a
+            UR5e).
+
+    Returns:
+        The robot record.
+
+    Raises:
+        ValueError: Unknown robot type.
+    """
+    if robot_type not in ROBOT_TYPES:
+        raise ValueError(f"unknown robot type {robot_type!r}; known: {sorted(ROBOT_TYPES)}")
+    return UR5E if robot_type == "rmb_ur5e_dual" else robot_for(ROBOT_TYPES[robot_type])
+
+
+def arm_keys(record: Robot) -> tuple[str, ...]:
+    """The keys of one single-arm record: ``<joint>.pos`` per arm joint, then the gripper.
+
+    Args:
+        record: A single-arm robot record.
+
+    Returns:
+        The keys, in joint-vector order.
+    """
+    (arm,) = record.arms
+    return (*(f"{joint}.pos" for joint in arm.joints), GRIPPER_KEY)
+
+
+def action_keys(robot_type: str) -> tuple[str, ...]:
+    """Every action key of a robot type, in joint-vector order.
+
+    Args:
+        robot_type: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual``.
+
+    Returns:
+        The keys (the observation's joint keys are the same).
+    """
+    keys = arm_keys(single_arm_record(robot_type))
+    if robot_type == "rmb_ur5e_dual":
+        return tuple(f"{side}_{key}" for side in DUAL_SIDES for key in keys)
+    return keys
+
+
+def home_vector(robot_type: str) -> np.ndarray:
+    """The joint vector a fresh twin of ``robot_type`` stands at (per arm: joints, gripper).
+
+    Args:
+        robot_type: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual``.
+
+    Returns:
+        The single-arm record's home command, once per arm.
+    """
+    home = single_arm_record(robot_type).home_command()
+    return np.tile(home, 2) if robot_type == "rmb_ur5e_dual" else home
