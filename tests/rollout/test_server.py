@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import signal
@@ -127,18 +126,33 @@ def test_a_connection_over_the_limit_is_told_so_and_closed(make_push_env, policy
     with serving(make_push_env(), policy, "tcp:127.0.0.1:0", max_connections=2) as server:
         address = ("127.0.0.1", server.address.port)
 
-        def connect() -> tuple[socket.socket, dict]:
-            """A raw connection and the server's first reply to it ('done' with no episode
-            running: ``not_running`` from a served connection)."""
+        def refused() -> tuple[socket.socket, dict | None]:
+            """A raw connection that sends nothing, and the reply the server sends unasked
+            (None if none came within 2 s: a served connection answers only requests).
+            Sending nothing matters: a server closing with our bytes unread would reset the
+            connection instead of ending it."""
             sock = socket.create_connection(address, timeout=10)
-            with contextlib.suppress(OSError):  # a refused one may be closed before this
-                sock.sendall(b"done\n")
-            line = sock.makefile("rb").readline()
+            sock.settimeout(2.0)
+            try:
+                line = sock.makefile("rb").readline()
+            except TimeoutError:
+                return sock, None
+            finally:
+                sock.settimeout(10)
             return sock, json.loads(line)
 
-        held = [connect() for _ in range(2)]
-        assert [reply["error"] for _, reply in held] == ["not_running", "not_running"]
-        extra, reply = connect()
+        def served(sock: socket.socket) -> dict:
+            """The reply to 'done' with no episode running (``not_running`` when served)."""
+            sock.sendall(b"done\n")
+            return json.loads(sock.makefile("rb").readline())
+
+        held = []
+        for _ in range(2):
+            sock, unasked = refused()
+            assert unasked is None, unasked  # under the limit: served, nothing said unasked
+            held.append(sock)
+        assert [served(sock)["error"] for sock in held] == ["not_running", "not_running"]
+        extra, reply = refused()
         assert reply == {
             "status": "error",
             "error": "too_many_connections",
@@ -147,17 +161,20 @@ def test_a_connection_over_the_limit_is_told_so_and_closed(make_push_env, policy
         }
         assert extra.recv(64) == b""  # closed by the server
         extra.close()
-        for sock, _ in held:  # the held ones are still served
-            sock.sendall(b"done\n")
-            assert json.loads(sock.makefile("rb").readline())["error"] == "not_running"
-        held.pop()[0].close()
+        for sock in held:  # the held ones are still served
+            assert served(sock)["error"] == "not_running"
+        held.pop().close()
         deadline = time.monotonic() + 10  # the server notices the close on its next poll
-        while (reply := connect())[1]["error"] == "too_many_connections":
-            reply[0].close()
+        while True:
+            sock, unasked = refused()
+            if unasked is None:
+                break
+            assert unasked["error"] == "too_many_connections", unasked
+            sock.close()
             assert time.monotonic() < deadline, "a freed connection slot was never reused"
-        assert reply[1]["error"] == "not_running"
-        reply[0].close()
-        held[0][0].close()
+        assert served(sock)["error"] == "not_running"
+        sock.close()
+        held[0].close()
 
 
 def test_crlf_lines_and_split_packets(make_push_env, policy, serving, sock_path):
