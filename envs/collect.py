@@ -349,9 +349,18 @@ def _aborted(future: Future) -> bool:
     return isinstance(result, _Stopped) and result.partial
 
 
+_DEAD_WORKER_WAIT_S = 2.0
+
+
 def _describe_dead(processes: list[BaseProcess], out: Path) -> str:
     """What :class:`WorkerDied` says: which workers ended, how, and what to do."""
-    dead = [p for p in processes if p.exitcode not in (None, 0)]
+    # A killed worker's pipes close before the kernel makes it a zombie: the pool can break a
+    # moment before its exit code can be read, so wait for it briefly.
+    deadline = time.monotonic() + _DEAD_WORKER_WAIT_S
+    while not (dead := [p for p in processes if p.exitcode not in (None, 0)]):
+        if time.monotonic() > deadline:
+            break
+        time.sleep(0.02)
     how = ", ".join(f"pid {p.pid} {_exit_reason(p.exitcode)}" for p in dead) or "unknown exit"
     return (
         f"a worker process ended abruptly while recording ({how}): killed from outside (kill, "
