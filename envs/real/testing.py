@@ -9,11 +9,32 @@ MuJoCo-backed twins instead.
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from rmb_lerobot.envs.real.driver import ArmState
+
+
+def wait_for(done: Callable[[], bool], timeout_s: float = 15.0, poll_s: float = 0.02) -> bool:
+    """Poll ``done`` until it is true or ``timeout_s`` passes (twins run in wall-clock time).
+
+    Args:
+        done: The condition.
+        timeout_s: Bound (s); generous by default, for loaded machines.
+        poll_s: Polling period (s).
+
+    Returns:
+        Whether ``done`` became true (checked once more at the deadline).
+    """
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if done():
+            return True
+        time.sleep(poll_s)
+    return bool(done())
 
 
 class FakeClock:

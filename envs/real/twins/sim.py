@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from rmb_lerobot.envs.mujoco.robots import build_robot_model
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.robots import Robot
 
 log = logging.getLogger(__name__)
@@ -332,12 +333,7 @@ class ArmSim:
         Returns:
             Whether ``done`` became true.
         """
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if done():
-                return True
-            time.sleep(poll_s)
-        return bool(done())
+        return wait_for(done, timeout_s, poll_s)
 
     def close(self) -> None:
         """Hold the arm and stop the thread; safe to call twice."""

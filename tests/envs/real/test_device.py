@@ -18,19 +18,10 @@ from lerobot.cameras import make_cameras_from_configs
 from rmb_lerobot.envs.real.cameras import TwinCamera, TwinCameraConfig, fovy_from_intrinsics
 from rmb_lerobot.envs.real.device import RealRobot, make_real_robot
 from rmb_lerobot.envs.real.limits import limits_for
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.robots import UR5E, UR5E_DUAL
 
-BOUND_S = 15.0
 SMALL = {"width": 32, "height": 24}
-
-
-def wait_for(condition, timeout_s: float = BOUND_S) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.02)
-    return bool(condition())
 
 
 @pytest.fixture(scope="module")

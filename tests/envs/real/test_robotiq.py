@@ -10,27 +10,18 @@ from __future__ import annotations
 
 import socket
 import threading
-import time
 
 import pytest
 
 from rmb_lerobot.envs.real.driver import ConnectionLost, GripperFault
 from rmb_lerobot.envs.real.drivers.robotiq import RobotiqGripper
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.real.twins.robotiq_server import RobotiqServer
 from rmb_lerobot.envs.real.twins.sim import ArmSim
 from rmb_lerobot.envs.robots import UR5E
 
 HOST = "127.0.0.1"
 BOUND_S = 15.0
-
-
-def wait_for(condition, timeout_s: float = BOUND_S, poll_s: float = 0.02) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(poll_s)
-    return bool(condition())
 
 
 @pytest.fixture(scope="module")

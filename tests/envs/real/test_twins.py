@@ -13,22 +13,13 @@ import mujoco
 import numpy as np
 import pytest
 
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.real.twins.sim import ArmSim, Box
 from rmb_lerobot.envs.real.twins.ur5e import UR5eTwin
 from rmb_lerobot.envs.real.twins.xarm7 import XArm7Twin
 from rmb_lerobot.envs.robots import UR5E, XARM7
 
 HOST = "127.0.0.1"
-BOUND_S = 15.0
-
-
-def wait_for(condition, timeout_s: float = BOUND_S, poll_s: float = 0.02) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(poll_s)
-    return bool(condition())
 
 
 @pytest.fixture(scope="module")

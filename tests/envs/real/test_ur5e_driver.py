@@ -26,21 +26,13 @@ from rmb_lerobot.envs.real.driver import (
     StaleState,
 )
 from rmb_lerobot.envs.real.drivers.ur5e import UR5eConfig, UR5eDriver
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.real.twins.ur5e import UR5eTwin
 from rmb_lerobot.envs.robots import UR5E
 
 HOST = "127.0.0.1"
 HOME = np.array(UR5E.arms[0].home)
 BOUND_S = 15.0  # generous: the machine is loaded
-
-
-def wait_for(condition, timeout_s: float = BOUND_S, poll_s: float = 0.02) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(poll_s)
-    return bool(condition())
 
 
 @pytest.fixture(scope="module")

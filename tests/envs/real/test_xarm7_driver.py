@@ -28,21 +28,13 @@ from rmb_lerobot.envs.real.drivers.gripper_units import (
     xarm_gripper_pulse_to_command,
 )
 from rmb_lerobot.envs.real.drivers.xarm7 import XArm7Config, XArm7Driver
+from rmb_lerobot.envs.real.testing import wait_for
 from rmb_lerobot.envs.real.twins.xarm7 import XArm7Twin
 from rmb_lerobot.envs.robots import XARM7
 
 HOST = "127.0.0.1"
 HOME = np.array(XARM7.arms[0].home)
 BOUND_S = 15.0
-
-
-def wait_for(condition, timeout_s: float = BOUND_S, poll_s: float = 0.02) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(poll_s)
-    return bool(condition())
 
 
 def config(**kwargs) -> XArm7Config:
