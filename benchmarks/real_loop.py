@@ -14,7 +14,13 @@ The baseline, measured in the same run, is the same sleep-and-spin pacing with n
 machine's own scheduling noise. Twin cameras render in their own threads (software GL on a
 machine without a GPU), as a RealSense captures in its own.
 
+With ``--realtime-priority N`` the loop's thread runs under ``SCHED_FIFO`` (the env option
+``realtime_priority``; the baseline too, so the two stay comparable); without it, under the
+normal scheduler.
+
     OMP_NUM_THREADS=1 MUJOCO_GL=egl .venv/bin/python benchmarks/real_loop.py --steps 500
+    OMP_NUM_THREADS=1 MUJOCO_GL=egl .venv/bin/python benchmarks/real_loop.py --steps 500 \
+        --realtime-priority 70
 """
 
 from __future__ import annotations
@@ -27,12 +33,13 @@ import numpy as np
 
 from rmb_lerobot.envs.real.cameras import TwinCameraConfig
 from rmb_lerobot.envs.real.config import make_real_env
+from rmb_lerobot.envs.real.realtime import use_realtime_priority
 
 PERIOD = 0.02
 WATCHDOG_TIMEOUT = 2.0  # s (default 0.2 s): see run()
 
 
-def baseline(steps: int, spin_s: float = 0.001) -> np.ndarray:
+def baseline(steps: int, spin_s: float) -> np.ndarray:
     """Periods (s) of the backend's pacing alone: sleep to ``spin_s`` before each tick, spin."""
     ticks = [time.monotonic()]
     tick = ticks[0] + PERIOD
@@ -47,7 +54,9 @@ def baseline(steps: int, spin_s: float = 0.001) -> np.ndarray:
     return np.diff(ticks)
 
 
-def run(cameras: int, steps: int, size: tuple[int, int]) -> dict[str, float]:
+def run(
+    cameras: int, steps: int, size: tuple[int, int], priority: int | None, spin_s: float
+) -> dict[str, float]:
     """One camera count: the env's tick periods and command latencies."""
     width, height = size
     views = [("front", "front"), ("hand", "hand")][:cameras]
@@ -64,6 +73,8 @@ def run(cameras: int, steps: int, size: tuple[int, int]) -> dict[str, float]:
             # A loaded machine stalls the loop now and then; the run measures it rather than
             # stopping at the first stall longer than the default 0.2 s.
             "watchdog_timeout": WATCHDOG_TIMEOUT,
+            "realtime_priority": priority,
+            "spin_s": spin_s,
         },
     )
     try:
@@ -99,12 +110,30 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=500, help="steps per run (50 per second)")
     parser.add_argument("--size", type=int, nargs=2, default=(128, 128), metavar=("W", "H"))
     parser.add_argument("--cameras", type=int, nargs="+", default=(0, 1, 2))
+    parser.add_argument(
+        "--realtime-priority", type=int, default=None, help="SCHED_FIFO priority of the loop"
+    )
+    parser.add_argument(
+        "--spin-s", type=float, default=0.001, help="spin before each tick (s; env option)"
+    )
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()}, cores: {os.cpu_count()}")
-    base = summary(baseline(args.steps))
+    fifo = args.realtime_priority
+    print(f"scheduling: {'normal' if fifo is None else f'SCHED_FIFO {fifo}'}")
+    previous = None
+    if args.realtime_priority is not None:
+        previous = use_realtime_priority(args.realtime_priority)
+    base = summary(baseline(args.steps, args.spin_s))
+    if previous is not None:
+        previous.restore()  # each env takes the priority itself from its first reset
     rows = [("baseline (pacing only)", base | {"overruns": 0, "lat_p50": 0.0, "lat_p99": 0.0})]
     for n in args.cameras:
-        rows.append((f"{n} camera(s) {args.size[0]}x{args.size[1]}", run(n, args.steps, args.size)))
+        rows.append(
+            (
+                f"{n} camera(s) {args.size[0]}x{args.size[1]}",
+                run(n, args.steps, args.size, args.realtime_priority, args.spin_s),
+            )
+        )
     print(f"load average after: {os.getloadavg()}")
     print(
         "| loop | period error p50 (ms) | p99 (ms) | max (ms) | p99 / baseline p99 | overruns "

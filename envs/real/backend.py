@@ -30,6 +30,7 @@ from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.real.cameras import read_frame
 from rmb_lerobot.envs.real.device import RealRobot, RobotState, make_real_robot
 from rmb_lerobot.envs.real.options import RealOptions
+from rmb_lerobot.envs.real.realtime import PreviousPolicy, use_realtime_priority
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
@@ -114,6 +115,7 @@ class RealBackend(Backend):
         self._obs_time = self._t0
         self.timing = LoopTiming()
         self.last_sent: np.ndarray | None = None
+        self._previous_policy: PreviousPolicy | None = None
         self.device.connect()
         assert self.device.last_state is not None
         self._state: RobotState = self.device.last_state
@@ -123,6 +125,8 @@ class RealBackend(Backend):
         """RMB's reset: move to ``home`` at the reset scale and wait, zero the wrench between
         two pauses, then arm the watchdogs (``world_offset`` is ignored: no scene)."""
         self._disarm()
+        if self.options.realtime_priority is not None and self._previous_policy is None:
+            self._previous_policy = use_realtime_priority(self.options.realtime_priority)
         self.device.move_to(home, scale=self.options.reset_scale)
         self._settle(np.asarray(home, dtype=np.float64))
         time.sleep(self.options.settle_s)
@@ -284,5 +288,11 @@ class RealBackend(Backend):
         return self.kinematics[arm].world_to_root(pos, rot)
 
     def close(self) -> None:
-        """Stop every arm and disconnect (safe to call twice)."""
-        self.device.disconnect()
+        """Stop every arm, disconnect and restore the stepping thread's scheduling (safe to
+        call twice)."""
+        try:
+            self.device.disconnect()
+        finally:
+            if self._previous_policy is not None:
+                self._previous_policy.restore()
+                self._previous_policy = None

@@ -58,6 +58,10 @@ class RealOptions:
         tcp_box: A TCP workspace box for every arm, or ``None``.
         spin_s: The loop sleeps until this long before each tick, then spins (s): a sleep
             wakes late by up to a scheduler tick on a loaded machine.
+        realtime_priority: Run the stepping thread under Linux's ``SCHED_FIFO`` at this
+            priority (1..99) from its first reset until :meth:`close`, or ``None`` (the
+            default) to leave scheduling alone. Needs ``CAP_SYS_NICE`` or an ``rtprio`` limit
+            (:mod:`~rmb_lerobot.envs.real.realtime`); the error says how to allow it.
         gelsight_ids: RMB's key, not supported yet (warned, ignored).
         pointcloud_camera_ids: RMB's key, not supported yet (warned, ignored).
         sanwa_keyboard_ids: RMB's key, not supported yet (warned, ignored).
@@ -82,6 +86,7 @@ class RealOptions:
     watchdog_timeout: float = WATCHDOG_TIMEOUT
     tcp_box: WorkspaceBox | None = None
     spin_s: float = 0.001
+    realtime_priority: int | None = None
     gelsight_ids: Mapping[str, Any] | None = None
     pointcloud_camera_ids: Mapping[str, Any] | None = None
     sanwa_keyboard_ids: Mapping[str, Any] | None = None
@@ -97,6 +102,10 @@ class RealOptions:
             raise ValueError(f"control_dt must be in (0, 1] s, got {self.control_dt}")
         if self.settle_s < 0 or self.spin_s < 0 or self.camera_fps <= 0:
             raise ValueError("settle_s and spin_s must be >= 0, camera_fps > 0")
+        if self.realtime_priority is not None and not 1 <= self.realtime_priority <= 99:
+            raise ValueError(
+                f"realtime_priority must be in 1..99 or None, got {self.realtime_priority}"
+            )
         for key in UNSUPPORTED_RMB_KEYS:
             if getattr(self, key):
                 log.warning("%s: not supported by this package yet; ignored", key)
