@@ -31,11 +31,12 @@ class OutsideWorkspace(SafetyError):
     """The TCP would leave the workspace box (or move further out of it)."""
 
 
-class StaleState(SafetyError, driver.StaleState):
-    """The controller's timestamp stopped advancing (or went backwards).
+class StaleReading(SafetyError, driver.StaleState):
+    """The safety layer saw the controller's timestamp stop advancing (or go backwards).
 
-    Also a :class:`rmb_lerobot.envs.real.driver.StaleState` (a driver's own, looser stale check
-    raises that one), so one ``except driver.StaleState`` catches a stale arm from either.
+    A subclass of the driver's :class:`~rmb_lerobot.envs.real.driver.StaleState` (a driver's
+    own, looser stale check raises that one), so one ``except StaleState`` catches a stale arm
+    from either, and ``except SafetyError`` catches every refusal of the layer.
     """
 
 

@@ -9,7 +9,7 @@ its two ways of choosing the duration, and no flag that skips a check. Per comma
 2. the command is a finite vector of the arm's joints, a finite gripper value, a finite scale
    and a duration in ``(0, max_duration]`` (:class:`NonFiniteCommand`, :class:`InvalidCommand`);
 3. a fresh reading of the arm, finite and with an advancing timestamp (:class:`InvalidState`,
-   :class:`StaleState`);
+   :class:`StaleReading`);
 4. RMB's ``overwrite_command_for_safety``, against that **measured** position ``q_m``:
    a step with ``max |q - q_m| > 90°`` and ``duration < 0.1 s`` is refused
    (:class:`JumpTooLarge`); otherwise the target is clamped to the joint bounds, then each joint
@@ -53,7 +53,7 @@ from rmb_lerobot.envs.real.errors import (
     NonFiniteCommand,
     OutsideWorkspace,
     SafetyError,
-    StaleState,
+    StaleReading,
     WatchdogTripped,
 )
 from rmb_lerobot.envs.real.limits import CONTROL_PERIOD, SafetyLimits
@@ -70,7 +70,7 @@ __all__ = [
     "SafetyError",
     "SafetyLayer",
     "SentCommand",
-    "StaleState",
+    "StaleReading",
     "WatchdogTripped",
 ]
 
@@ -242,7 +242,7 @@ class SafetyLayer:
 
         Raises:
             InvalidState: A value is not finite, or a shape is wrong (the arm is stopped).
-            StaleState: The timestamp went backwards, or has not advanced for
+            StaleReading: The timestamp went backwards, or has not advanced for
                 ``limits.stale_timeout`` s or ``limits.max_stale_reads`` reads (arm stopped).
         """
         with self._lock:
@@ -273,18 +273,18 @@ class SafetyLayer:
             self._last_timestamp, self._last_advance, self._repeats = timestamp, now, 0
             return
         if timestamp < last:
-            raise StaleState(
+            raise StaleReading(
                 f"{robot}: state timestamp went backwards from {last:.6f} s to {timestamp:.6f} s"
             )
         self._repeats += 1
         age = now - self._last_advance
         if self._repeats >= self.limits.max_stale_reads:
-            raise StaleState(
+            raise StaleReading(
                 f"{robot}: state timestamp {timestamp:.6f} s has not advanced for "
                 f"{self._repeats} reads (limit {self.limits.max_stale_reads})"
             )
         if age > self.limits.stale_timeout:
-            raise StaleState(
+            raise StaleReading(
                 f"{robot}: state timestamp {timestamp:.6f} s has not advanced for {age:.3f} s "
                 f"(limit {self.limits.stale_timeout} s)"
             )
@@ -337,7 +337,7 @@ class SafetyLayer:
                 limits.jump_min_duration``.
             OutsideWorkspace: The TCP would leave the workspace box.
             InvalidState: The reading has non-finite values.
-            StaleState: The reading is stale.
+            StaleReading: The reading is stale.
             LayerClosed: The layer is closed.
         """
         if duration is None:
@@ -374,7 +374,7 @@ class SafetyLayer:
                 than the scaled limit): only when the arm is far outside its bounds.
             OutsideWorkspace: The TCP would leave the workspace box on the way.
             InvalidState: The reading has non-finite values.
-            StaleState: The reading is stale.
+            StaleReading: The reading is stale.
             LayerClosed: The layer is closed.
         """
         return self._command(

@@ -18,7 +18,7 @@ from rmb_lerobot.envs.real.errors import (
     NonFiniteCommand,
     OutsideWorkspace,
     SafetyError,
-    StaleState,
+    StaleReading,
 )
 from rmb_lerobot.envs.real.limits import WorkspaceBox, limits_for
 from rmb_lerobot.envs.real.safety import SafetyLayer
@@ -235,7 +235,7 @@ def test_a_timestamp_that_stops_for_5_reads_is_stale(layer, arm):
     arm.hold_timestamp = 10
     for _ in range(4):
         layer.read()  # 4 repeats are tolerated (two reads per period can share a stamp)
-    with pytest.raises(StaleState, match="not advanced for 5 reads"):
+    with pytest.raises(StaleReading, match="not advanced for 5 reads"):
         layer.read()
     assert arm.stops == 1
 
@@ -245,14 +245,14 @@ def test_a_timestamp_that_stops_for_over_0_1_s_is_stale(layer, arm, clock):
     clock.advance(0.05)
     layer.read()
     clock.advance(0.06)  # 0.11 s since the timestamp last advanced
-    with pytest.raises(StaleState, match=r"not advanced for 0.110 s \(limit 0.1 s\)"):
+    with pytest.raises(StaleReading, match=r"not advanced for 0.110 s \(limit 0.1 s\)"):
         layer.step(UR5E_HOME, 0.0)
     assert arm.commands == []
 
 
 def test_a_timestamp_going_backwards_is_stale(layer, arm):
     arm.rewind = 1.0
-    with pytest.raises(StaleState, match="went backwards"):
+    with pytest.raises(StaleReading, match="went backwards"):
         layer.read()
 
 
@@ -350,7 +350,7 @@ def test_ctrl_c_inside_a_command_stops_the_arm(layer, arm):
 
 
 def test_every_refusal_is_a_safety_error():
-    for error in (InvalidCommand, NonFiniteCommand, JumpTooLarge, OutsideWorkspace, StaleState):
+    for error in (InvalidCommand, NonFiniteCommand, JumpTooLarge, OutsideWorkspace, StaleReading):
         assert issubclass(error, SafetyError)
 
 
@@ -371,4 +371,4 @@ def test_zero_wrench_and_stop_go_to_the_driver(layer, arm):
 def test_the_layers_stale_state_is_also_the_drivers():
     from rmb_lerobot.envs.real import driver
 
-    assert issubclass(StaleState, driver.StaleState) and issubclass(StaleState, SafetyError)
+    assert issubclass(StaleReading, driver.StaleState) and issubclass(StaleReading, SafetyError)
