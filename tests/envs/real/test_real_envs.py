@@ -18,7 +18,7 @@ from rmb_lerobot import keys as K
 from rmb_lerobot.envs.real.config import load_real_config, make_real_env
 from rmb_lerobot.envs.real.options import RealOptions
 from rmb_lerobot.envs.real.record import record_episode
-from rmb_lerobot.envs.real.task import UR5E_REAL_HOME, XARM7_REAL_HOME
+from rmb_lerobot.envs.real.task import UR5E_DUAL_LEFT_REAL_HOME, UR5E_REAL_HOME, XARM7_REAL_HOME
 from rmb_lerobot.envs.registry import ENVS, REAL_ENVS, entry_for
 from rmb_lerobot.envs.robots import UR5E, UR5E_DUAL
 from rmb_lerobot.episode import open_episode
@@ -116,6 +116,9 @@ def test_the_dual_env_records_both_arms():
         assert step[K.MEASURED_EEF_POSE].shape == (14,) and step[K.MEASURED_EEF_WRENCH].shape == (
             12,
         )
-        np.testing.assert_allclose(step[K.MEASURED_JOINT_POS][7:13], UR5E_REAL_HOME, atol=0.05)
+        # RMB's RealUR5eDualDemoEnv pose: the left arm mirrored, the right at the single home.
+        joints = step[K.MEASURED_JOINT_POS]
+        np.testing.assert_allclose(joints[0:6], UR5E_DUAL_LEFT_REAL_HOME, atol=0.05)
+        np.testing.assert_allclose(joints[7:13], UR5E_REAL_HOME, atol=0.05)
     finally:
         env.close()
