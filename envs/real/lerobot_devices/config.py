@@ -1,7 +1,7 @@
 """Configs of the LeRobot device types this package adds: robots ``rmb_ur5e``, ``rmb_xarm7``,
-``rmb_ur5e_dual`` and the teleoperator ``rmb_scripted``.
+``rmb_ur5e_dual`` and the teleoperators ``rmb_scripted`` and ``rmb_keyboard``.
 
-Importing this module registers the four types with LeRobot (``--robot.type=rmb_ur5e``,
+Importing this module registers the five types with LeRobot (``--robot.type=rmb_ur5e``,
 ``--teleop.type=rmb_scripted``); :mod:`rmb_lerobot.registration` imports it when LeRobot
 imports ``lerobot_env_rmb``. LeRobot finds each device class by the config class's name minus
 ``Config`` in the config module's *parent* package (``lerobot.utils.import_utils.
@@ -32,8 +32,15 @@ DEFAULT_COMMAND_DURATION_S = 1.0 / 30.0
 ROBOT_TYPES = {"rmb_ur5e": "ur5e", "rmb_xarm7": "xarm7", "rmb_ur5e_dual": "ur5e_dual"}
 """LeRobot robot type -> the robot record it drives (:mod:`rmb_lerobot.envs.robots`)."""
 
+JOINT_ACTIONS = "joint"
+EE_VELOCITY_ACTIONS = "ee_velocity"
+ACTION_SPACES = (JOINT_ACTIONS, EE_VELOCITY_ACTIONS)
+"""Values of a robot's ``action_space`` (:class:`RmbArmConfig`)."""
+
 SCRIPTED_TELEOP_TYPE = "rmb_scripted"
 SCRIPTED_MOTIONS = ("wave", "hold")
+KEYBOARD_TELEOP_TYPE = "rmb_keyboard"
+KEYBOARD_KEY_SOURCES = ("auto", "terminal", "pynput")
 
 
 @dataclass
@@ -57,6 +64,19 @@ class RmbArmConfig:
         watchdog_timeout_s: The arm is stopped when no action arrives within this long after
             the previous action's duration ran out (the safety layer's watchdog); the next
             action then resumes streaming from where the arm stands.
+        action_space: ``"joint"``: an action is the joint targets and the gripper command
+            (``<joint>.pos``, ``gripper.pos``). ``"ee_velocity"``: an action is an
+            end-effector twist in the arm's base frame (``ee_x.vel`` .. ``ee_yaw.vel``, m/s
+            and rad/s, held for ``command_duration_s``) and ``gripper.pos``; the robot keeps
+            its own end-effector target, started at the measured pose, solves it by IK and
+            sends the joints through the safety layer (:mod:`.ee_action`). This is what a
+            Cartesian teleoperator (``rmb_keyboard``) drives through the stock LeRobot loops.
+        ramp_first_action: With joint actions, the first action of a stream (after
+            ``connect``, or after the watchdog stopped the arm) that lies further from the
+            measured joints than a reset move covers in one command duration is reached by the
+            safety layer's duration-scaled reset move (RMB's reset speed) before it is sent,
+            instead of being clamped into a full-speed lunge or refused as a jump. This lets a
+            teleoperator or a replayed episode start anywhere. ``False``: send it as it is.
     """
 
     driver: str = "sim"
@@ -64,6 +84,8 @@ class RmbArmConfig:
     cameras: dict[str, CameraConfig] = field(default_factory=dict)
     command_duration_s: float = DEFAULT_COMMAND_DURATION_S
     watchdog_timeout_s: float = WATCHDOG_TIMEOUT
+    action_space: str = JOINT_ACTIONS
+    ramp_first_action: bool = True
 
     def resolved_host(self, arm: str) -> str:
         """The address to use: ``host``, or 127.0.0.1 for ``sim`` when none is given.
@@ -76,8 +98,12 @@ class RmbArmConfig:
 
         Raises:
             ValueError: Unknown driver, ``sdk`` without a host, ``sim`` with a non-loopback
-                host, or a duration / timeout that is not positive.
+                host, a duration / timeout that is not positive, or an unknown action space.
         """
+        if self.action_space not in ACTION_SPACES:
+            raise ValueError(
+                f"{arm}: action_space must be one of {ACTION_SPACES}, got {self.action_space!r}"
+            )
         if self.driver not in DRIVER_KINDS:
             raise ValueError(f"{arm}: driver must be one of {DRIVER_KINDS}, got {self.driver!r}")
         if self.host is None and self.driver == "sdk":
@@ -182,9 +208,10 @@ class RmbUR5eDualConfig(RobotConfig):
 class RmbScriptedConfig(TeleoperatorConfig):
     """A scripted command stream for tests and dry runs: no device, no operator.
 
-    It emits every action key of the robot type named in ``robot``, around the home pose of
-    its robot record (where the twins start). Use it on the twin; on a real arm the safety
-    layer refuses a first command more than 90° away from where the arm stands.
+    It emits every joint action key of the robot type named in ``robot``, around the home
+    pose of its robot record (where the twins start). It sees no robot state: the robot's
+    ``ramp_first_action`` (on by default) moves an arm that stands elsewhere to the first
+    action at reset speed before the stream starts.
 
     Attributes:
         robot: The robot type it drives: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual``.
@@ -210,3 +237,41 @@ class RmbScriptedConfig(TeleoperatorConfig):
             raise ValueError(f"rmb_scripted: motion must be one of {SCRIPTED_MOTIONS}")
         if not self.period_s > 0 or not 0 <= self.amplitude_deg <= 45:
             raise ValueError("rmb_scripted: needs period_s > 0 and 0 <= amplitude_deg <= 45")
+
+
+@TeleoperatorConfig.register_subclass(KEYBOARD_TELEOP_TYPE)
+@dataclass(kw_only=True)
+class RmbKeyboardConfig(TeleoperatorConfig):
+    """RMB's keyboard bindings as end-effector velocity actions, with or without a display.
+
+    Drives a robot with ``--robot.action_space=ee_velocity``: each step it emits the twist
+    keys (``ee_x.vel`` .. ``ee_yaw.vel``) and ``gripper.pos`` of every arm. One key press moves
+    the target by RMB's step (1 cm, 0.05 rad; yaw 0.1 rad; gripper 50 of 255) when the loop
+    runs at ``fps`` and the robot's ``command_duration_s`` is ``1 / fps``.
+
+    Attributes:
+        robot: The robot type it drives: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual``
+            (Tab / 1 / 2 switch the arm the keys move).
+        fps: The loop's rate (LeRobot's ``--fps``): a press of one step becomes a velocity of
+            step * fps for that step.
+        keys: ``"terminal"``: the terminal on standard input in cbreak mode (no display; over
+            SSH too); ``"pynput"``: the desktop session; ``"auto"``: the terminal when
+            standard input is one, else pynput where a display exists.
+        gripper_start: The gripper command it starts from (0 = open): it sees no robot
+            state, so the first action sets the gripper to this.
+    """
+
+    robot: str = "rmb_ur5e"
+    fps: float = 30.0
+    keys: str = "auto"
+    gripper_start: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.robot not in ROBOT_TYPES:
+            raise ValueError(f"rmb_keyboard: robot must be one of {sorted(ROBOT_TYPES)}")
+        if self.keys not in KEYBOARD_KEY_SOURCES:
+            raise ValueError(
+                f"rmb_keyboard: keys must be one of {KEYBOARD_KEY_SOURCES}, got {self.keys!r}"
+            )
+        if not self.fps > 0:
+            raise ValueError(f"rmb_keyboard: fps must be > 0, got {self.fps}")

@@ -6,16 +6,35 @@ prefixes one arm's keys ``left_`` and the other's ``right_``, as LeRobot's biman
 Observation and action use the same names, and no other key ends in ``.pos`` / ``.vel``:
 ``lerobot-rollout`` feeds a policy only those keys (and cameras) and returns the arm to the
 ``.pos`` values it started at.
+
+With ``action_space: ee_velocity`` the action is instead, per arm, the end-effector twist
+``ee_x.vel`` .. ``ee_yaw.vel`` (m/s, rad/s in the arm's base frame) and ``gripper.pos``
+(:mod:`.ee_action`); they end in ``.vel`` as LeKiwi's base velocities do, so
+``lerobot-rollout`` keeps them. The observation is the same in both action spaces.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from rmb_lerobot.envs.real.lerobot_devices.config import ROBOT_TYPES
+from rmb_lerobot.envs.real.lerobot_devices.config import (
+    ACTION_SPACES,
+    EE_VELOCITY_ACTIONS,
+    JOINT_ACTIONS,
+    ROBOT_TYPES,
+)
 from rmb_lerobot.envs.robots import UR5E, Robot, robot_for
 
 GRIPPER_KEY = "gripper.pos"
+EE_VELOCITY_KEYS = (
+    "ee_x.vel",
+    "ee_y.vel",
+    "ee_z.vel",
+    "ee_roll.vel",
+    "ee_pitch.vel",
+    "ee_yaw.vel",
+)
+"""The twist keys of an ``ee_velocity`` action: linear (m/s), then angular (rad/s)."""
 DUAL_SIDES = ("left", "right")
 
 
@@ -50,16 +69,37 @@ def arm_keys(record: Robot) -> tuple[str, ...]:
     return (*(f"{joint}.pos" for joint in arm.joints), GRIPPER_KEY)
 
 
-def action_keys(robot_type: str) -> tuple[str, ...]:
+def arm_action_keys(record: Robot, action_space: str = JOINT_ACTIONS) -> tuple[str, ...]:
+    """The action keys of one single-arm record in an action space.
+
+    Args:
+        record: A single-arm robot record.
+        action_space: ``joint`` or ``ee_velocity``.
+
+    Returns:
+        ``joint``: :func:`arm_keys`; ``ee_velocity``: the twist keys, then ``gripper.pos``.
+
+    Raises:
+        ValueError: Unknown action space.
+    """
+    if action_space not in ACTION_SPACES:
+        raise ValueError(f"action_space must be one of {ACTION_SPACES}, got {action_space!r}")
+    if action_space == EE_VELOCITY_ACTIONS:
+        return (*EE_VELOCITY_KEYS, GRIPPER_KEY)
+    return arm_keys(record)
+
+
+def action_keys(robot_type: str, action_space: str = JOINT_ACTIONS) -> tuple[str, ...]:
     """Every action key of a robot type, in joint-vector order.
 
     Args:
         robot_type: ``rmb_ur5e``, ``rmb_xarm7`` or ``rmb_ur5e_dual``.
+        action_space: ``joint`` or ``ee_velocity`` (every arm alike).
 
     Returns:
-        The keys (the observation's joint keys are the same).
+        The keys (with ``joint``, the observation's joint keys are the same).
     """
-    keys = arm_keys(single_arm_record(robot_type))
+    keys = arm_action_keys(single_arm_record(robot_type), action_space)
     if robot_type == "rmb_ur5e_dual":
         return tuple(f"{side}_{key}" for side in DUAL_SIDES for key in keys)
     return keys
