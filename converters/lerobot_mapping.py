@@ -9,6 +9,9 @@ Resolution order, per part, first match wins:
 
    - ``observation.state`` -> ``measured_joint_pos``; ``action`` -> ``command_joint_pos``
      (a vector may split into several keys given as ``KEY:DIM``; the last may omit ``:DIM``);
+     an ``rmb_ur5e`` / ``rmb_xarm7`` end-effector action (``ee_x.vel`` .. ``ee_yaw.vel``,
+     ``gripper.pos``) -> ``command_eef_vel`` + ``command_gripper_joint_pos``; any other
+     action with velocity names (``*.vel``) is refused unless ``--action-keys`` says what it is;
    - ``observation.images.<cam>`` -> ``<cam>_rgb_image``; a depth feature (``is_depth_map``)
      ``observation.images.<cam>_depth`` -> ``<cam>_depth_image``;
    - ``observation.<q>`` / ``action.<q>`` -> ``measured_<q>`` / ``command_<q>`` when that is an
@@ -80,8 +83,24 @@ def _vector(
     by_prefix = split_by_prefix(names) if names else None
     if by_prefix is not None and (keys is None or [k for k, _ in by_prefix] == list(keys)):
         return tuple(by_prefix)
-    default = K.MEASURED_JOINT_POS if feature == N.STATE else K.COMMAND_JOINT_POS
-    return ((keys[0] if keys and len(keys) == 1 else default, None),)
+    if keys and len(keys) == 1:
+        return ((keys[0], None),)
+    if feature == N.ACTION_KEY and any(name.endswith(".vel") for name in names):
+        return _velocity_action(names)
+    return ((K.MEASURED_JOINT_POS if feature == N.STATE else K.COMMAND_JOINT_POS, None),)
+
+
+def _velocity_action(names: Sequence[str]) -> KeyDims:
+    """An action of velocities is no joint command: the end-effector twist of our real-arm
+    robots, or an error that says how to name it."""
+    if list(names) == [*N.EE_VELOCITY_NAMES, N.GRIPPER_POS_NAME]:
+        return ((K.COMMAND_EEF_VEL, len(N.EE_VELOCITY_NAMES)), (K.COMMAND_GRIPPER_JOINT_POS, 1))
+    raise ValueError(
+        f"action names {list(names)} hold velocities ('.vel'), so the action is not "
+        f"{K.COMMAND_JOINT_POS!r}; say which RMB keys it splits into with --action-keys "
+        f"KEY:DIM ... (e.g. {K.COMMAND_EEF_VEL}:6 {K.COMMAND_GRIPPER_JOINT_POS}:1 per arm in "
+        "vector order; the keys must be contiguous)"
+    )
 
 
 def _default_image_key(feature: str, is_depth: bool) -> str:

@@ -28,6 +28,21 @@ def env_pixels_key(camera: str) -> str:
     return f"{ENV_PIXELS_KEY}/{camera}"
 
 
+# ---------------------------------------------------------------- real-arm robot plugins
+# Action and observation names of the ``rmb_ur5e`` / ``rmb_xarm7`` LeRobot robots (their
+# datasets come from ``lerobot-record``): joints and the gripper end in ``.pos``; with
+# ``action_space: ee_velocity`` the action is the end-effector twist (m/s, rad/s in the arm's
+# base frame) and the gripper. ``rmb-convert from-lerobot`` reads these names.
+GRIPPER_POS_NAME = "gripper.pos"
+EE_VELOCITY_NAMES = (
+    "ee_x.vel",
+    "ee_y.vel",
+    "ee_z.vel",
+    "ee_roll.vel",
+    "ee_pitch.vel",
+    "ee_yaw.vel",
+)
+
 # ---------------------------------------------------------------- converted datasets
 # LeRobot's robots name a camera's depth stream ``<camera>_depth`` (e.g. so_follower), so a
 # depth camera becomes ``observation.images.<camera>_depth``, flagged ``is_depth_map``.

@@ -212,3 +212,32 @@ def test_stale_temporaries_of_a_killed_run_are_removed(converted_depth, tmp_path
     from_lerobot(root=converted_depth, output=tmp_path / "out", episodes=[0], progress=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
     assert any("stale" in r.getMessage() for r in caplog.records)
+
+
+def _action_features(names: list[str]) -> dict:
+    return {
+        "observation.state": {
+            "dtype": "float32",
+            "shape": [7],
+            "names": [f"j{i}.pos" for i in range(7)],
+        },
+        "action": {"dtype": "float32", "shape": [len(names)], "names": names},
+    }
+
+
+def test_an_end_effector_velocity_action_is_not_taken_for_joint_positions():
+    from rmb_lerobot import lerobot_names as N
+    from rmb_lerobot.converters.lerobot_mapping import resolve_mapping
+
+    # What an rmb_ur5e robot with action_space=ee_velocity records under lerobot-record.
+    twist = [*N.EE_VELOCITY_NAMES, N.GRIPPER_POS_NAME]
+    mapping = resolve_mapping(_action_features(twist), depth_keys=[], rmb_meta=None)
+    assert mapping.action == (("command_eef_vel", 6), ("command_gripper_joint_pos", 1))
+    assert mapping.state == (("measured_joint_pos", None),)
+
+    # Other velocity actions (a mobile base, a dual arm's interleaved twists) must be named.
+    with pytest.raises(ValueError, match=r"'\.vel'.*--action-keys"):
+        resolve_mapping(_action_features(["x.vel", "theta.vel"]), depth_keys=[], rmb_meta=None)
+    # Joint positions keep the documented default.
+    joints = resolve_mapping(_action_features(["a.pos", "b.pos"]), depth_keys=[], rmb_meta=None)
+    assert joints.action == (("command_joint_pos", None),)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rmb_lerobot import lerobot_names as N
 from rmb_lerobot.envs.real.lerobot_devices.config import (
     ACTION_SPACES,
     EE_VELOCITY_ACTIONS,
@@ -25,15 +26,8 @@ from rmb_lerobot.envs.real.lerobot_devices.config import (
 )
 from rmb_lerobot.envs.robots import UR5E, Robot, robot_for
 
-GRIPPER_KEY = "gripper.pos"
-EE_VELOCITY_KEYS = (
-    "ee_x.vel",
-    "ee_y.vel",
-    "ee_z.vel",
-    "ee_roll.vel",
-    "ee_pitch.vel",
-    "ee_yaw.vel",
-)
+GRIPPER_KEY = N.GRIPPER_POS_NAME
+EE_VELOCITY_KEYS = N.EE_VELOCITY_NAMES
 """The twist keys of an ``ee_velocity`` action: linear (m/s), then angular (rad/s)."""
 DUAL_SIDES = ("left", "right")
 
