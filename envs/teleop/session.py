@@ -10,6 +10,11 @@ Episodes are written with :class:`~rmb_lerobot.episode.EpisodeWriter`, which bui
 a hidden temporary and moves it into place only when it is saved: a discarded episode, Esc,
 Ctrl-C or an exception leaves nothing at the destination. Signals handled by
 :mod:`~rmb_lerobot.envs.interrupts` are raised between two steps.
+
+With ``parallel_envs`` the same joint command also drives further envs, each recording its own
+episode (:mod:`~rmb_lerobot.envs.teleop.parallel`); a ``view``
+(:mod:`~rmb_lerobot.envs.teleop.live_view`) is sent env 0's images, the targets and the phase
+after each step.
 """
 
 from __future__ import annotations
@@ -17,22 +22,31 @@ from __future__ import annotations
 import logging
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from rmb_lerobot import keys as K
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.interrupts import raise_if_signalled, recording
 from rmb_lerobot.envs.teleop.command import CommandTracker
 from rmb_lerobot.envs.teleop.device import InputDevice, KeySource
+from rmb_lerobot.envs.teleop.parallel import Lane, lane_seed, lane_world
 from rmb_lerobot.envs.teleop.phases import PROMPTS, Phase, PhaseMachine, Transition
-from rmb_lerobot.episode import EpisodeFormat, EpisodeWriter
+from rmb_lerobot.episode import EpisodeFormat
 
 logger = logging.getLogger(__name__)
+
+
+@runtime_checkable
+class StepView(Protocol):
+    """Where the loop shows each step (the live view)."""
+
+    def log_step(self, session: TeleopSession) -> None:
+        """Show the session's state after a step."""
+        ...
 
 
 @runtime_checkable
@@ -58,7 +72,8 @@ class TeleopConfig:
         sync_before_record: Pass through the unrecorded SYNC phase before recording.
         seed: Reset number k uses seed + k.
         realtime: Pace the loop to the env's control period (off: as fast as it runs).
-        max_episodes: Quit after this many saved episodes (None: until Esc).
+        max_episodes: Quit after this many kept demonstrations (None: until Esc); with
+            parallel envs a demonstration is kept when any of its episodes is.
         replay: Run the replay phases (the device is a replayed log).
         auto_replay: Replay without waiting for ``n``.
         save_replay: Record each replay as an episode.
@@ -90,6 +105,7 @@ class TeleopResult:
     saved: list[Path] = field(default_factory=list)
     discarded: int = 0  # episodes recorded and not kept (f, failure with success-only, Esc)
     steps: int = 0  # control steps run
+    demos: int = 0  # demonstrations with at least one episode kept
 
 
 class TeleopSession:
@@ -103,6 +119,9 @@ class TeleopSession:
         log: Where prompts go (default: the module logger at INFO).
         clock: Monotonic seconds (tests pass a fake).
         sleep: Sleeps seconds (tests pass a fake).
+        parallel_envs: Further sim envs driven by env 0's joint command, one episode each per
+            demonstration (``rmb-teleop --num-envs``).
+        view: Shown each step (the live view); None: nothing.
     """
 
     def __init__(
@@ -115,8 +134,12 @@ class TeleopSession:
         log: Callable[[str], None] | None = None,
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
+        parallel_envs: Sequence[RmbEnv] = (),
+        view: StepView | None = None,
     ):
         self.env = env
+        self.lanes = [Lane(e, k) for k, e in enumerate([env, *parallel_envs])]
+        self.view = view
         self.device = device
         self.keys = keys
         self.config = config
@@ -129,9 +152,7 @@ class TeleopSession:
             auto=config.auto_replay,
         )
         self.tracker: CommandTracker | None = None
-        self.writer: EpisodeWriter | None = None
         self.result = TeleopResult()
-        self.success = False
         self._resets = 0
         self._replays = 0
         self._deadline = 0.0
@@ -139,6 +160,16 @@ class TeleopSession:
     @property
     def phase(self) -> Phase:
         return self.machine.phase
+
+    @property
+    def success(self) -> bool:
+        """Whether env 0's task has succeeded since its last reset."""
+        return self.lanes[0].success
+
+    @property
+    def recording(self) -> bool:
+        """Whether this step is recorded (teleop, or a replay being saved)."""
+        return self.lanes[0].writer is not None and self.phase in (Phase.TELEOP, Phase.REPLAY)
 
     # ------------------------------------------------------------------ loop
     def run(self) -> TeleopResult:
@@ -172,11 +203,12 @@ class TeleopSession:
             if self.phase is Phase.QUIT:
                 return
         command = self._command([k for k in pressed if k not in phase_keys])
-        if self.writer is not None and self.phase in (Phase.TELEOP, Phase.REPLAY):
-            self.writer.append(self.env.rmb_step_data(command))
-        _, _, _, _, info = self.env.step(command)
-        self.success = bool(info.get("is_success", False))
+        recording = self.recording
+        for lane in self.lanes:
+            lane.record_and_step(command, recording)
         self.result.steps += 1
+        if self.view is not None:
+            self.view.log_step(self)
         self._pace()
 
     def _command(self, device_keys: list[str]) -> np.ndarray:
@@ -237,37 +269,42 @@ class TeleopSession:
         config = self.config
         if config.replay:
             return self._replays >= config.replay_repeat
-        return config.max_episodes is not None and len(self.result.saved) >= config.max_episodes
+        return config.max_episodes is not None and self.result.demos >= config.max_episodes
 
     def _reset(self) -> None:
-        options = {}
-        world = self._world_idx()
-        if world is not None:
-            options["world_idx"] = world
-        self.env.reset(seed=self.config.seed + self._resets, options=options)
+        for lane in self.lanes:
+            options = {}
+            world = self._world_idx(lane.index)
+            if world is not None:
+                options["world_idx"] = world
+            seed = lane_seed(self.config.seed, self._resets, lane.index, len(self.lanes))
+            lane.env.reset(seed=seed, options=options)
+            lane.success = False
         self._resets += 1
-        self.success = False
         self.tracker = CommandTracker(self.env)
-        self.log(f"reset into world {self.env.world_idx}")
+        worlds = " ".join(str(lane.env.world_idx) for lane in self.lanes)
+        self.log(f"reset into world{'s' if len(self.lanes) > 1 else ''} {worlds}")
 
-    def _world_idx(self) -> int | None:
-        if self.config.replay:
-            return int(getattr(self.device, "world_idx", 0))
-        worlds = self.config.world_idx
-        return None if not worlds else worlds[len(self.result.saved) % len(worlds)]
+    def _world_idx(self, lane: int = 0) -> int | None:
+        num_worlds = int(self.env.task.num_worlds) if len(self.lanes) > 1 else 0
+        if self.config.replay:  # the log's world, then the next ones for parallel envs
+            world = int(getattr(self.device, "world_idx", 0))
+            return world if lane == 0 else (world + lane) % num_worlds
+        return lane_world(
+            self.config.world_idx, num_worlds, self.result.demos, lane, len(self.lanes)
+        )
 
     # ------------------------------------------------------------------ episodes
     def _open_writer(self) -> None:
         self._discard()
-        path = self.next_path()
-        attrs = {**self.env.rmb_attrs(), K.ATTR_DEMO_NAME: path.stem}
-        if self.config.task_desc:
-            attrs[K.ATTR_TASK_DESC] = self.config.task_desc
-        self.writer = EpisodeWriter(path, attrs, depth_codec=self.config.depth_codec)
+        for lane in self.lanes:
+            path = self.next_path(lane.index)
+            lane.open(path, self.config.task_desc, self.config.depth_codec)
 
-    def next_path(self) -> Path:
-        """Where the next episode goes: ``<demo>_world<idx>_<NNN>.<rmb|hdf5>``, NNN one past
-        the highest number of this demo's episodes already in ``out``."""
+    def next_path(self, lane: int = 0) -> Path:
+        """Where lane ``lane``'s next episode goes: ``<demo>_world<idx>_<NNN>.<rmb|hdf5>``, NNN
+        one past the highest number of this demo's episodes already in ``out``, plus ``lane``
+        (numbers of parallel episodes a failure discarded stay unused)."""
         config = self.config
         demo = config.demo_name or self.env.rmb_env_name
         suffix = EpisodeFormat.from_name(config.fmt).short_name
@@ -277,30 +314,26 @@ class TeleopSession:
             for entry in config.out.iterdir()
             if (match := pattern.fullmatch(entry.name))
         ]
-        index = max(numbers, default=-1) + 1
-        return config.out / f"{demo}_world{self.env.world_idx}_{index:03d}.{suffix}"
+        index = max(numbers, default=-1) + 1 + lane
+        world = self.lanes[lane].env.world_idx
+        return config.out / f"{demo}_world{world}_{index:03d}.{suffix}"
 
     def _finish(self, save: bool) -> None:
-        writer, self.writer = self.writer, None
-        if writer is None:
-            return
-        if len(writer) == 0:
-            writer.abort()
-            self.log("nothing recorded: no episode written")
-            return
-        if save and self.config.save_success_only and not self.success:
-            self.log("the task did not succeed and --save-success-only is set: discarded")
-            save = False
-        if save:
-            self.result.saved.append(writer.close())
-            self.log(f"saved {writer.path} ({len(writer)} steps)")
-        else:
-            writer.abort()
-            self.result.discarded += 1
-            self.log("episode discarded")
+        kept = 0
+        for lane in self.lanes:
+            recorded = lane.writer is not None and len(lane.writer) > 0
+            path, message = lane.finish(save, self.config.save_success_only)
+            if message and len(self.lanes) > 1:
+                message = f"env {lane.index}: {message}"
+            if message:
+                self.log(message)
+            if path is not None:
+                self.result.saved.append(path)
+                kept += 1
+            elif recorded:
+                self.result.discarded += 1
+        self.result.demos += kept > 0
 
     def _discard(self) -> None:
-        writer, self.writer = self.writer, None
-        if writer is not None:
-            writer.abort()
-            self.result.discarded += 1
+        for lane in self.lanes:
+            self.result.discarded += lane.abort()

@@ -2,7 +2,9 @@
 
 Phases: standby -> (sync) -> teleop (recording) -> save (s) / discard (f) -> next
 episode; Esc quits. Keys come from the terminal (cbreak mode: no display needed, works over
-SSH) or, without one, from the desktop through pynput.
+SSH) or, without one, from the desktop through pynput. ``--num-envs N`` drives N sim envs in
+different worlds with the same joint command (one episode each per demonstration);
+``--live-view`` shows the session in rerun (a window, or an ``.rrd`` file headless).
 """
 
 from __future__ import annotations
@@ -93,6 +95,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-depth", action="store_true", help="record RGB only")
     parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
     parser.add_argument(
+        "--no-antialias",
+        action="store_true",
+        help="MuJoCo: render without 4x multisampling (about 2x faster in software rendering)",
+    )
+    parser.add_argument(
         "--keys",
         choices=KEY_SOURCES,
         default="auto",
@@ -104,6 +111,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--real-config", type=Path, default=None, help="a real env's YAML (RMB's keys + driver)"
+    )
+    parser.add_argument(
+        "--num-envs",
+        type=int,
+        default=1,
+        help="sim envs driven at once, in different worlds (env 0's IK, the same joint "
+        "command to all); each demonstration records one episode per env",
+    )
+    parser.add_argument(
+        "--live-view",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="PATH.rrd",
+        help="show images, eef targets and the phase in rerun (viz extra): a viewer window "
+        "when a display exists, else OUT/live_view.rrd; with PATH always that file",
+    )
+    parser.add_argument(
+        "--live-view-image-every", type=int, default=1, help="log images every N steps"
     )
     return parser
 
@@ -122,6 +148,8 @@ def _make_env(entry: EnvEntry, args: argparse.Namespace) -> RmbEnv:
             f"are {' '.join(entry.cameras)}"
         )
     size = (args.image_size[0], args.image_size[1])
+    if args.no_antialias:
+        kwargs["antialias"] = False
     return entry.make(image_size=size, random_shift=args.random_shift, **kwargs)
 
 
@@ -146,6 +174,12 @@ def _check(args: argparse.Namespace, entry: EnvEntry) -> None:
         raise ValueError(f"--max-episodes must be >= 1, got {args.max_episodes}")
     if args.replay_repeat_count < 1:
         raise ValueError(f"--replay-repeat-count must be >= 1, got {args.replay_repeat_count}")
+    if args.no_antialias and entry.simulator != "mujoco":
+        raise ValueError(f"--no-antialias is a MuJoCo option; {entry.rmb_env_name} is not MuJoCo")
+    if args.num_envs < 1:
+        raise ValueError(f"--num-envs must be >= 1, got {args.num_envs}")
+    if args.num_envs > 1 and entry.simulator == "real":
+        raise ValueError(f"--num-envs {args.num_envs}: {entry.rmb_env_name} is a real env (one)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -154,7 +188,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     from rmb_lerobot.envs.interrupts import Interrupted, interrupts_raise
     from rmb_lerobot.envs.teleop.session import TeleopConfig, TeleopSession
 
-    env = device = keys = session = None
+    env = device = keys = session = view = None
+    parallel: list[RmbEnv] = []
     with interrupts_raise():
         try:
             entry = entry_for(args.env)
@@ -180,6 +215,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     file=sys.stderr,
                 )
             env = _make_env(entry, args)
+            parallel = [_make_env(entry, args) for _ in range(args.num_envs - 1)]
+            view = _make_view(args, out)
             config = TeleopConfig(
                 out=out,
                 fmt=args.fmt,
@@ -198,7 +235,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             if not replay:
                 print(KEY_HELP, file=sys.stderr)
-            session = TeleopSession(env, device, keys, config, log=_say)
+            session = TeleopSession(
+                env, device, keys, config, log=_say, parallel_envs=parallel, view=view
+            )
             result = session.run()
         except (ValueError, RmbFormatError, ImportError, OSError) as exc:
             print(f"rmb-teleop: error: {exc}", file=sys.stderr)
@@ -213,11 +252,25 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 128 + signum
         finally:
-            for thing in (keys, device, env):
+            for thing in (keys, device, env, *parallel):
                 if thing is not None:
                     thing.close()
+            if view is not None and (rrd := view.close()) is not None:
+                print(f"live view: {rrd} (open it with: rerun {rrd})", file=sys.stderr)
     print(f"saved {len(result.saved)} episode(s) in {config.out} ({result.discarded} discarded)")
     return 0
+
+
+def _make_view(args: argparse.Namespace, out: Path):
+    """The live view ``--live-view`` asks for (None without the flag)."""
+    if args.live_view is None:
+        return None
+    from rmb_lerobot.envs.teleop.live_view import LiveView
+
+    every = args.live_view_image_every
+    if args.live_view:
+        return LiveView(Path(args.live_view), image_every=every)
+    return LiveView.for_display(out / "live_view.rrd", image_every=every)
 
 
 def _say(message: str) -> None:

@@ -84,6 +84,8 @@ def test_replay_runs_headless_and_records_the_log_again(log, tmp_path):
         (["cable", "--world-idx", "9"], "--world-idx values must be in 0..5"),
         (["cable", "--auto-replay"], "go with --input-device replay"),
         (["real_ur5e_demo", "--keys", "terminal"], "pass --real-config"),
+        (["real_ur5e_demo", "--real-config", "x.yaml", "--num-envs", "2"], "is a real env (one)"),
+        (["pybullet_sawyer_grasp", "--no-antialias"], "--no-antialias is a MuJoCo option"),
     ],
 )
 def test_bad_flags_are_named(argv, message, tmp_path, capsys):
@@ -109,3 +111,30 @@ def test_without_a_terminal_or_display_the_keyboard_says_where_to_run(
         assert main(["cable", "--out", str(tmp_path / "out")]) == 2
     assert "no key source: standard input is not a terminal" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_num_envs_replays_into_three_worlds_with_a_live_view_file(log, tmp_path):
+    """Headless parallel collection: one replayed log drives three envs (the log's world 2,
+    then 3 and 4); each records its episode, and the live view goes to an .rrd file."""
+    pytest.importorskip("rerun", reason="the viz extra (rerun-sdk) is not installed")
+    out, rrd = tmp_path / "parallel", tmp_path / "view.rrd"
+    argv = ["cable", "--input-device", "replay", "--replay-log", str(log), "--auto-replay"]
+    argv += ["--save-replay", "--no-realtime", "--num-envs", "3", "--live-view", str(rrd)]
+    assert main([*argv, "--keys", "none", "--out", str(out), *SMALL]) == 0
+    paths = find_episodes(out)
+    assert [p.name for p in paths] == [
+        "MujocoUR5eCable_world2_000.rmb",
+        "MujocoUR5eCable_world3_001.rmb",
+        "MujocoUR5eCable_world4_002.rmb",
+    ]
+    for path in paths:
+        with open_episode(path) as ep, open_episode(log) as original:
+            np.testing.assert_allclose(
+                ep[K.COMMAND_JOINT_POS][:], original[K.COMMAND_JOINT_POS][:], atol=1e-9
+            )
+    assert rrd.stat().st_size > 1000 and not [p for p in tmp_path.iterdir() if "tmp-" in p.name]
+
+
+def test_num_envs_must_be_positive(tmp_path, capsys):
+    assert main(["cable", "--num-envs", "0", "--out", str(tmp_path / "out"), "--cameras"]) == 2
+    assert "--num-envs must be >= 1, got 0" in capsys.readouterr().err
