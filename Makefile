@@ -12,10 +12,11 @@ export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= $(MUJOCO_GL)
 VENV := .venv
 # Optional extras the test suite exercises (VLA policies to their download boundary, MT-ACT's
-# sentence encoder, rmb-benchmark on Ray, rmb-data view, the PyBullet TACTO envs). `keyboard` (Linux input devices) is left
-# out: its tests use a test double. The `docs` group builds the docs site (`make docs`, and
+# sentence encoder, rmb-benchmark on Ray, rmb-data view, the PyBullet TACTO envs, the GELLO
+# servo SDK that talks to a fake servo chain on a pty). `keyboard` (Linux input devices) and
+# `spacemouse` (system hidapi) are left out: their tests use test doubles. The `docs` group builds the docs site (`make docs`, and
 # `make test` builds it --strict).
-EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet --group docs
+EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet --extra gello --group docs
 STAMP := $(VENV)/.synced
 
 .PHONY: help setup demo test lint docs docs-check format bench bench-learning bench-grid clean

@@ -19,6 +19,7 @@ ENV_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.envs.lerobot_config",)
 DEVICE_CONFIG_MODULES: tuple[str, ...] = (
     "rmb_lerobot.envs.real.lerobot_devices",
     "rmb_lerobot.envs.real.cameras.config_twin",
+    "rmb_lerobot.envs.real.lerobot_devices.config_teleop_devices",
 )
 # Modules whose import registers LeRobot policy types (``--policy.type=...``).
 POLICY_CONFIG_MODULES: tuple[str, ...] = (
