@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python benchmarks/convert.py [--episodes 2] [--steps 100] [--size 640 480]
-        [--cameras front hand] [--workdir DIR]
+        [--cameras front hand] [--workdir DIR] [--workers-row] [--depth-only]
 
 Source: synthetic UR5e episodes (:mod:`rmb_lerobot.synthetic`: RGB + depth per camera at RMB's
 31.25 Hz) written as compact ``.rmb`` episodes with the original's codecs (H.264 RGB, lossless
@@ -19,7 +19,11 @@ Source: synthetic UR5e episodes (:mod:`rmb_lerobot.synthetic`: RGB + depth per c
   (decode, write PNGs, re-encode): each episode decoded whole into RAM (as RMB's loader does),
   then LeRobot's default ``add_frame`` path, which writes every frame as a PNG (depth: TIFF)
   and encodes them in ``save_episode`` (one process per camera, LeRobot's default), with the
-  same encoder settings. It runs at fps 31 because that path cannot encode 31.25 Hz.
+  same encoder settings, except that depth keeps x265's default preset (LeRobot's; ours uses
+  :data:`rmb_lerobot.converters.write.DEPTH_PRESET`, same lossless codes). It runs at fps 31
+  because that path cannot encode 31.25 Hz.
+- ``ours (copy, --workers 2)``: ``--video-codec copy`` with two worker processes (episodes in
+  parallel, merged afterwards); only with ``--workers-row``.
 
 Reported per row: frames per second (episode steps, wall clock), CPU seconds per 100 frames
 (this process and its children: robust to other jobs on the machine), and ratios. Depth rows
@@ -93,7 +97,7 @@ def png_round_trip(paths: list[Path], root: Path, depth: bool) -> None:
         features=schema.features(),
         root=root,
         robot_type=plan.robot_type,
-        depth_encoder=quiet_depth_encoder(),
+        depth_encoder=quiet_depth_encoder(preset=None),  # x265's default, as LeRobot's
     )
     for source in plan.episodes:
         with open_episode(source.path) as ep:
@@ -116,6 +120,10 @@ def main() -> None:
     parser.add_argument("--size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
     parser.add_argument("--cameras", nargs="+", default=["front", "hand"])
     parser.add_argument("--workdir", type=Path, help="keep files here (default: a temp dir)")
+    parser.add_argument(
+        "--workers-row", action="store_true", help="also convert with --workers 2 (copy)"
+    )
+    parser.add_argument("--depth-only", action="store_true", help="only the RGB + depth rows")
     args = parser.parse_args()
 
     import av
@@ -139,17 +147,20 @@ def main() -> None:
     )
 
     rows = []
-    for depth in (False, True):
+    runs = [("ours (LeRobot's AV1)", None, 1), ("ours (--video-codec copy)", COPY, 1)]
+    if args.workers_row:
+        runs.append(("ours (copy, --workers 2)", COPY, 2))
+    for depth in (True,) if args.depth_only else (False, True):
         streams = "RGB + depth" if depth else "RGB"
         decode = measure(lambda d=depth: decode_only(paths, d))
         results = {"decode only": decode}
-        for name, codec in (("ours (LeRobot's AV1)", None), ("ours (--video-codec copy)", COPY)):
-            out = work / f"ours_{codec}_{int(depth)}"
+        for name, codec, workers in runs:
+            out = work / f"ours_{codec}_{workers}_{int(depth)}"
             shutil.rmtree(out, ignore_errors=True)
             options = ConvertOptions(depth=depth)
             results[name] = measure(
-                lambda o=out, opt=options, c=codec: to_lerobot(
-                    [source], output=o, options=opt, video_codec=c, progress=False
+                lambda o=out, opt=options, c=codec, w=workers: to_lerobot(
+                    [source], output=o, options=opt, video_codec=c, workers=w, progress=False
                 )
             )
         png_root = work / f"png_{int(depth)}"

@@ -43,9 +43,24 @@ _TASK = "task"  # the per-frame task string LeRobot's add_frame requires
 _X265_PARAMS = "x265-params"
 
 
-def quiet_depth_encoder() -> DepthEncoderConfig:
-    """LeRobot's default depth encoder, minus x265's per-video console report."""
+# x265 preset of the depth videos. They are lossless, so every preset stores the same 12-bit
+# codes and LeRobot decodes them the same way; presets differ only in encoding CPU and bytes
+# (benchmarks/depth_presets.py: "ultrafast" needs 0.3-0.4x the CPU of x265's default "medium"
+# for 1.1-1.3x the bytes). None: x265's default, as LeRobot's recorder writes.
+DEPTH_PRESET = "ultrafast"
+
+
+def quiet_depth_encoder(preset: str | None = DEPTH_PRESET) -> DepthEncoderConfig:
+    """LeRobot's default depth encoder at x265 ``preset``, minus x265's per-video console report.
+
+    Args:
+        preset: x265 preset name, or None for x265's default (``medium``).
+
+    Returns:
+        The encoder settings; LeRobot records them in the dataset's ``info.json``.
+    """
     config = depth_encoder_defaults()
+    config.preset = preset
     params = config.extra_options.get(_X265_PARAMS)
     if params is not None and config.vcodec == "hevc":
         config.extra_options = {**config.extra_options, _X265_PARAMS: f"{params}:log-level=error"}

@@ -24,11 +24,47 @@ def metres_to_mm(depth_m: np.ndarray) -> np.ndarray:
     The original RMB truncates (``(depth * 1000).astype(np.uint16)``); rounding halves the
     error to 0.5 mm. Values that have no uint16 millimetre representation are mapped to 0
     ("no data") explicitly, where the original silently wraps them around: NaN, +-inf,
-    negative depths, and depths above 65.535 m (after rounding).
+    negative depths, and depths above 65.535 m (after rounding). float32 (and float16) input,
+    what renderers and cameras give, is converted in float32 with the same result as the exact
+    float64 formula (see :func:`_float32_metres_to_mm`); anything else goes through float64.
     """
+    array = np.asarray(depth_m)
+    if array.dtype in (np.float32, np.float16):
+        return _float32_metres_to_mm(array.astype(np.float32, copy=False))
+    return _float64_metres_to_mm(array)
+
+
+def _float64_metres_to_mm(depth_m: np.ndarray) -> np.ndarray:
+    """The reference conversion: exact product in float64, then rint and the range check."""
     mm = np.rint(np.asarray(depth_m, dtype=np.float64) * 1000.0)
     valid = np.isfinite(mm) & (mm >= 0) & (mm <= MAX_DEPTH_MM)
     return np.where(valid, mm, 0).astype(np.uint16)
+
+
+def _float32_metres_to_mm(depth_m: np.ndarray) -> np.ndarray:
+    """float32 metres -> uint16 mm in float32 arithmetic, equal to :func:`_float64_metres_to_mm`.
+
+    A float32 value times 1000 is exact in float64 but rounded in float32. Rounding to nearest
+    is monotonic and every half-integer below 2**23 is a float32, so the rounded product can
+    only land on the other side of a ``n + 0.5`` boundary by landing exactly on it: those few
+    pixels (dozens in a 640x480 image) are redone in float64. Two to three times faster than
+    the float64 formula on a rendered step's images (benchmarks/render_depth.py).
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # inf, inf - inf: not valid anyway
+        product = np.multiply(depth_m, np.float32(1000.0))
+        mm = np.rint(product)
+        np.subtract(product, mm, out=product)
+    ties = np.flatnonzero(np.abs(product, out=product) == np.float32(0.5))
+    # 0 <= mm <= 65535 in one comparison (NaN compares False): |mm - 32767.5| <= 32767.5.
+    half = np.float32(MAX_DEPTH_MM / 2)
+    np.subtract(mm, half, out=product)
+    valid = np.abs(product, out=product) <= half
+    if not valid.all():
+        mm[~valid] = 0
+    out = mm.astype(np.uint16)
+    if ties.size:
+        out.flat[ties] = _float64_metres_to_mm(depth_m.flat[ties])
+    return out
 
 
 def mm_to_metres(depth_mm: np.ndarray) -> np.ndarray:
