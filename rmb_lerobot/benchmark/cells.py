@@ -13,10 +13,12 @@ the command's log), so one failing cell never stops the grid.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import time
@@ -24,6 +26,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from rmb_lerobot.benchmark.recipes import collect_covers
 from rmb_lerobot.cli.quickstart import Stage
@@ -44,7 +48,9 @@ class Cell:
     num_cpus: float = 1
     num_gpus: float = 0
     reset: tuple[Path, ...] = ()  # partial outputs of an earlier attempt, removed first
-    key: tuple[tuple[str, Any], ...] = ()  # (policy, task, seed, demos, world) for the rows
+    key: tuple[tuple[str, Any], ...] = ()  # (policy, task, seed, demos, world, shift): rows
+    inputs: tuple[Path, ...] = ()  # a convert cell's episodes (to count distinct demos)
+    launcher: tuple[str, ...] = ()  # the config's command prefix (nice, a container, ...)
 
     @property
     def record(self) -> Path:
@@ -58,7 +64,8 @@ class Cell:
         """The command with the output directory written ``{out}``: the same grid moved to
         another mount point (a cluster's shared path) is still the same command."""
         root = str(self.out)
-        return [arg.replace(root, "{out}") for arg in (self.stage.name, *self.stage.args)]
+        words = (*self.launcher, self.stage.name, *self.stage.args)
+        return [arg.replace(root, "{out}") for arg in words]
 
 
 @dataclass
@@ -101,7 +108,9 @@ def execute(cell: Cell, upstream: Sequence[CellResult]) -> CellResult:
         for path in cell.reset:
             _remove(path)
         cell.record.unlink(missing_ok=True)
-        returncode, seconds = run_logged(cell.stage, cell.log, threads=cell.num_cpus)
+        returncode, seconds = run_logged(
+            cell.stage, cell.log, threads=cell.num_cpus, launcher=cell.launcher
+        )
         if returncode != 0:
             reason = f"{cell.stage.name} exited with status {returncode}"
             return _failure(cell, f"{reason}; end of {cell.log}:\n{log_tail(cell.log)}", durations)
@@ -136,8 +145,11 @@ def _remove(path: Path) -> None:
         path.unlink()
 
 
-def run_logged(stage: Stage, log: Path, threads: float = 1) -> tuple[int, float]:
-    """Run ``stage`` with stdout and stderr in ``log``; returns (exit status, seconds).
+def run_logged(
+    stage: Stage, log: Path, threads: float = 1, launcher: Sequence[str] = ()
+) -> tuple[int, float]:
+    """Run ``stage`` (after the ``launcher`` prefix, if any) with stdout and stderr in ``log``;
+    returns (exit status, seconds).
 
     Offline (no Hub, no wandb), headless rendering, and as many torch/OpenMP threads as the
     cell's CPUs. An exception here (e.g. Ray cancelling the task) stops the command too.
@@ -150,9 +162,10 @@ def run_logged(stage: Stage, log: Path, threads: float = 1) -> tuple[int, float]
     env["OMP_NUM_THREADS"] = str(max(1, int(threads)))
     start = time.perf_counter()
     with open(log, "w") as stream:
-        stream.write(f"$ {stage}\n")
+        stream.write(f"$ {shlex.join(launcher) + ' ' if launcher else ''}{stage}\n")
         stream.flush()
-        process = subprocess.Popen(stage.argv(), stdout=stream, stderr=subprocess.STDOUT, env=env)
+        argv = [*launcher, *stage.argv()]
+        process = subprocess.Popen(argv, stdout=stream, stderr=subprocess.STDOUT, env=env)
         try:
             returncode = process.wait()
         finally:
@@ -241,7 +254,30 @@ def cell_data(cell: Cell) -> dict[str, Any]:
         return eval_summary(cell.output)
     if cell.kind == "train":
         return {"curve": parse_learning_curve(cell.log), "final_loss": parse_final_loss(cell.log)}
+    if cell.kind == "convert" and cell.inputs:
+        return {"demos": len(cell.inputs), "distinct_demos": distinct_trajectories(cell.inputs)}
     return {}
+
+
+def distinct_trajectories(episodes: Sequence[Path], decimals: int = 3) -> int:
+    """How many of the RMB ``episodes`` differ in their commanded joint trajectory (rounded to
+    ``decimals``, i.e. mrad): demos that replay one world's scene count once.
+
+    Raises:
+        ValueError: an episode has no ``command_joint_pos``.
+    """
+    import h5py
+
+    seen = set()
+    for episode in episodes:
+        main = episode / "main.rmb.hdf5" if episode.is_dir() else episode
+        with h5py.File(main, "r") as stream:
+            if "command_joint_pos" not in stream:
+                raise ValueError(f"{main}: no command_joint_pos; expected an RMB episode")
+            commands = np.asarray(stream["command_joint_pos"], dtype=np.float64)
+        commands = np.round(commands, decimals) + 0.0  # + 0.0: -0.0 hashes as 0.0
+        seen.add((commands.shape, hashlib.sha256(commands.tobytes()).hexdigest()))
+    return len(seen)
 
 
 def eval_summary(eval_info: Path) -> dict[str, Any]:

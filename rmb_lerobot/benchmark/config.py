@@ -21,6 +21,12 @@ Top-level keys (defaults in brackets)::
     video_codec: null               # rmb-convert --video-codec (default: rmb-convert's)
     collect_seed: 0
     collect_args: []                # extra rmb-collect arguments (e.g. --cycle-instructions)
+    collect_shift: 0.0              # metres: rmb-collect --random-shift, a fresh object shift per
+                                    # demo (drawn from collect seeds, disjoint from evaluation's)
+    eval_shift: null                # metres: also evaluate every world with
+                                    # --env.random_shift=S (placements unseen in training)
+    launcher: []                    # a prefix of every cell's command, e.g. [nice, -n, "10"] or
+                                    # a container's [apptainer, exec, img.sif]
     resources:                      # Ray resources per cell kind
       collect: {num_cpus: 1}  convert: {num_cpus: 1}  train: {num_cpus: 1, num_gpus: 0}
       eval: {num_cpus: 1}
@@ -30,6 +36,10 @@ Top-level keys (defaults in brackets)::
     tables:                         # markdown tables and plots (default: one of every policy)
       policies: {title: "...", rows: [mlp, act, diffusion, sarnn]}
       cameras: {rows: {act_front: Front, act: Front+Hand}, tasks: [insert]}
+
+With ``collect_shift`` 0 every demo in world K replays world K's scene, and evaluation in
+world K (shift 0) replays it again: a "seen" number. ``eval_shift`` adds an "unseen" one per
+world, from evaluation seeds none of the demos used (checked here); the report shows both.
 
 A policy spec takes ``recipe``, ``type`` (LeRobot ``--policy.type``), ``steps``, ``batch_size``,
 ``options`` (``--policy.KEY=VALUE``, added to the recipe's), ``args`` (raw ``lerobot-train``
@@ -45,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from rmb_lerobot.benchmark.recipes import RECIPES, Recipe, policy_option_args
+from rmb_lerobot.envs.collect import CollectConfig
 from rmb_lerobot.envs.registry import entry_for
 
 CELL_KINDS = ("collect", "convert", "train", "eval")
@@ -121,6 +132,9 @@ class BenchmarkConfig:
     video_codec: str | None = None
     collect_seed: int = 0
     collect_args: tuple[str, ...] = ()
+    collect_shift: float = 0.0
+    eval_shift: float | None = None
+    launcher: tuple[str, ...] = ()
     resources: dict[str, Resources] = field(default_factory=dict)
     retries: int = 1
     learning_curve: Study | None = None
@@ -172,8 +186,9 @@ class BenchmarkConfig:
 TOP_KEYS = {
     "out", "tasks", "policies", "seeds", "worlds", "demos", "collect_worlds", "eval_episodes",
     "eval_seed", "episode_length", "image_size", "cameras", "device", "video_codec",
-    "collect_seed", "collect_args", "resources", "retries", "learning_curve", "data_size",
-    "tables",
+    "collect_seed", "collect_args", "collect_shift", "eval_shift", "launcher", "resources",
+    "retries",
+    "learning_curve", "data_size", "tables",
 }  # fmt: skip
 POLICY_KEYS = {
     "recipe", "type", "steps", "batch_size", "options", "args", "cameras", "depth", "tasks",
@@ -367,6 +382,11 @@ def parse_config(raw: Mapping[str, Any], source: str = "<config>") -> BenchmarkC
         else p.string(raw["video_codec"], "video_codec"),
         collect_seed=p.integer(raw.get("collect_seed", 0), "collect_seed", minimum=0),
         collect_args=tuple(p.str_list(raw.get("collect_args", []), "collect_args")),
+        collect_shift=float(p.number(raw.get("collect_shift", 0.0), "collect_shift")),
+        eval_shift=None
+        if raw.get("eval_shift") is None
+        else float(p.number(raw["eval_shift"], "eval_shift")),
+        launcher=tuple(p.str_list(raw.get("launcher", []), "launcher")),
         resources=p.resources(raw.get("resources", {})),
         retries=p.integer(raw.get("retries", 1), "retries", minimum=0),
         learning_curve=p.study(raw.get("learning_curve"), "learning_curve", policies, tasks),
@@ -383,8 +403,45 @@ def parse_config(raw: Mapping[str, Any], source: str = "<config>") -> BenchmarkC
                     f"{' '.join(missing)}: not a camera of {entry.rmb_env_name} "
                     f"(its cameras: {' '.join(entry.cameras)})",
                 )
+    if config.eval_shift == 0:
+        p.fail("eval_shift", "expected a shift > 0 metres (null: no unseen-shift evaluation)")
+    if "--random-shift" in " ".join(config.collect_args):
+        p.fail("collect_args", "give the demos' object shift as collect_shift, not --random-shift")
+    _check_seeds_disjoint(config, p)
     tables = p.tables(raw.get("tables"), policies, tasks)
     return replace(config, tables=tables)
+
+
+def collect_seed_range(config: BenchmarkConfig) -> range:
+    """Every reset seed ``rmb-collect`` may use: episode k's attempt a resets with
+    ``collect_seed + k + a * episodes`` (``envs/collect.py``), for up to the most demos any
+    training needs and ``CollectConfig.max_attempts`` attempts."""
+    episodes = max(
+        max(config.demo_counts(p, t)) for p in config.policies for t in config.tasks_of(p)
+    )
+    return range(config.collect_seed, config.collect_seed + episodes * CollectConfig.max_attempts)
+
+
+def eval_seed_range(config: BenchmarkConfig) -> range:
+    """Every reset seed ``lerobot-eval`` uses (``--seed`` + episode, per seed and world)."""
+    starts = [config.eval_seed + 100 * s + w for s in config.seeds for w in config.worlds]
+    return range(min(starts), max(starts) + config.eval_episodes)
+
+
+def _check_seeds_disjoint(config: BenchmarkConfig, p: _Parser) -> None:
+    """With random shifts, a seed both collection and evaluation use would evaluate on a
+    placement a demo showed: refuse it rather than report it as unseen."""
+    if not config.collect_shift and not config.eval_shift:
+        return
+    collect, evaluate = collect_seed_range(config), eval_seed_range(config)
+    if collect.start < evaluate.stop and evaluate.start < collect.stop:
+        p.fail(
+            "eval_seed",
+            f"evaluation seeds {evaluate.start}..{evaluate.stop - 1} overlap the demos' seeds "
+            f"{collect.start}..{collect.stop - 1} (collect_seed, demos x "
+            f"{CollectConfig.max_attempts} attempts): with object shifts the evaluation must "
+            "not replay a demo's placement; move eval_seed or collect_seed",
+        )
 
 
 class _Parser:

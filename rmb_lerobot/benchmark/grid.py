@@ -3,13 +3,15 @@
 Per task one ``collect`` cell records the most demos any policy needs, with every camera (and
 depth) the task's policies use; per (task, cameras, depth, demo count) one ``convert`` cell makes
 a LeRobotDataset from the first N demos (which cycle through the worlds, so every prefix is
-balanced); per (policy, task, seed, demo count) one ``train`` cell; per world one ``eval`` cell.
+balanced); per (policy, task, seed, demo count) one ``train`` cell; per world one ``eval`` cell,
+and with ``eval_shift`` a second one on placements shifted by up to that many metres.
 Layout under ``OUT`` (absolute; on a cluster a path every node sees)::
 
     data/<task>/rmb/                              rmb-collect
     data/<task>/<cameras>[_depth]_n<N>/           rmb-convert to-lerobot
     train/<task>/<policy>/seed<S>-n<N>/           lerobot-train --output_dir
     eval/<task>/<policy>/seed<S>-n<N>/world<K>/   lerobot-eval --output_dir (eval_info.json)
+    eval/<task>/<policy>/seed<S>-n<N>/world<K>-shift<M>/   the same with --env.random_shift=M
     cells/<cell id>.json   logs/<cell id>.log     completion records, command logs
     results.jsonl  curves.jsonl  config.json  report/
 """
@@ -82,8 +84,9 @@ def plan(config: BenchmarkConfig) -> dict[str, Cell]:
         cells[train.id] = train
     for train, policy, task, seed, demos in trains:
         for world in config.worlds:
-            cell = _eval_cell(config, out, policy, train, task, seed, demos, world)
-            cells[cell.id] = cell
+            for shift in (0.0, config.eval_shift) if config.eval_shift else (0.0,):
+                cell = _eval_cell(config, out, policy, train, task, seed, demos, world, shift)
+                cells[cell.id] = cell
     return cells
 
 
@@ -118,6 +121,7 @@ def _collect_cell(config: BenchmarkConfig, out: Path, task: str) -> Cell | None:
         extra=(
             "--world-idx",
             *map(str, config.collect_worlds),
+            *([f"--random-shift={config.collect_shift}"] if config.collect_shift else []),
             *config.collect_args,
         ),
     )
@@ -129,6 +133,7 @@ def _collect_cell(config: BenchmarkConfig, out: Path, task: str) -> Cell | None:
         (),
         out,
         reset=(rmb,),
+        launcher=config.launcher,
         **_resources(config, "collect"),
     )
 
@@ -158,6 +163,8 @@ def _convert_cell(config: BenchmarkConfig, out: Path, key: DatasetKey, collect: 
         (collect.id,),
         out,
         reset=(dataset,),
+        inputs=tuple(episode_paths(config, collect.output, key.task, key.demos)),
+        launcher=config.launcher,
         **_resources(config, "convert"),
     )
 
@@ -207,6 +214,7 @@ def _train_cell(
         out,
         reset=(output_dir,),  # lerobot-train refuses an existing output directory
         key=(("policy", policy.name), ("task", task), ("seed", seed), ("demos", key.demos)),
+        launcher=config.launcher,
         **_resources(config, "train"),
     )
 
@@ -220,8 +228,10 @@ def _eval_cell(
     seed: int,
     demos: int,
     world: int,
+    shift: float = 0.0,
 ) -> Cell:
-    output_dir = out / "eval" / task / policy.name / _tag(seed, demos) / f"world{world}"
+    name = f"world{world}-shift{shift:g}" if shift else f"world{world}"
+    output_dir = out / "eval" / task / policy.name / _tag(seed, demos) / name
     stage = eval_stage(
         train.output,
         env_inputs(config, policy, task),
@@ -230,15 +240,17 @@ def _eval_cell(
         eval_seed(config, seed, world),
         output_dir,
         device=config.device,
+        random_shift=shift,
     )
     return Cell(
-        f"eval/{task}/{policy.name}/{_tag(seed, demos)}/world{world}",
+        f"eval/{task}/{policy.name}/{_tag(seed, demos)}/{name}",
         "eval",
         stage,
         output_dir / "eval_info.json",
         (train.id,),
         out,
         reset=(output_dir,),
-        key=(*train.key, ("world", world)),
+        key=(*train.key, ("world", world), ("shift", shift)),
+        launcher=config.launcher,
         **_resources(config, "eval"),
     )

@@ -289,8 +289,11 @@ def eval_stage(
     output_dir: Path,
     *,
     device: str = "cpu",
+    random_shift: float = 0.0,
 ) -> Stage:
-    """The unmodified ``lerobot-eval``: ``episodes`` episodes, all in world ``world``."""
+    """The unmodified ``lerobot-eval``: ``episodes`` episodes, all in world ``world``, each with
+    a uniform object shift of up to ``random_shift`` metres drawn from its seed (0: the world's
+    own placement)."""
     return Stage(
         "lerobot-eval",
         [
@@ -298,6 +301,7 @@ def eval_stage(
             f"--policy.device={device}",
             *env.args(),
             f"--env.world_idx={world}",
+            *([f"--env.random_shift={random_shift}"] if random_shift else []),
             f"--eval.n_episodes={episodes}",
             "--eval.batch_size=1",
             "--eval.use_async_envs=false",

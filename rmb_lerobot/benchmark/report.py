@@ -1,8 +1,10 @@
 """Results rows, and the paper-style tables and plots made from them.
 
-``results.jsonl`` holds one row per (policy, task, seed, demos, world): the success rate of the
-``lerobot-eval`` run in that world, its episode counts, the seconds each stage took, and for a
-failed cell the reason (the end of the failing command's log). From these rows:
+``results.jsonl`` holds one row per (policy, task, seed, demos, world, shift): the success rate
+of the ``lerobot-eval`` run in that world (``shift`` 0: the world's own placement; > 0: object
+placements shifted at random by up to that many metres, unseen in training), the number of
+distinct demo trajectories the policy was trained on, its episode counts, the seconds each stage
+took, and for a failed cell the reason (the end of the failing command's log). From these rows:
 
 - a markdown table per configured table (rows: policies, columns: tasks and their average), each
   cell ``mean% (±std)`` over seeds as in the paper's Tables II and III: a seed's success rate
@@ -11,6 +13,8 @@ failed cell the reason (the end of the failing command's log). From these rows:
   population standard deviation across tasks (which is how the paper's averages come out:
   ACT's 45.0 % (±18) from its eight task means);
 - a heatmap and a grouped bar chart per table (matplotlib, Agg backend);
+- with ``eval_shift``, per table the same cells on seen and unseen placements side by side, with
+  each task's distinct demo trajectories, and a bar chart of both;
 - the learning curves (success vs training step, from lerobot-train's periodic evaluation) and
   the data-size curves (success vs number of demos), mean ± std over seeds, one panel per policy.
 """
@@ -35,17 +39,21 @@ if TYPE_CHECKING:
 RESULTS_FILE = "results.jsonl"
 CURVES_FILE = "curves.jsonl"
 REPORT_DIR = "report"
-ROW_KEY = ("policy", "task", "seed", "demos", "world")
+ROW_KEY = ("policy", "task", "seed", "demos", "world", "shift")
 
 
 # ----------------------------------------------------------------------------- rows
 def row_key(row: dict[str, Any]) -> tuple:
-    return tuple(row[k] for k in ROW_KEY)
+    """A row's identity; rows written before ``shift`` existed are shift 0 (seen worlds)."""
+    return tuple(row.get(k, 0.0) if k == "shift" else row[k] for k in ROW_KEY)
 
 
-def result_row(config: BenchmarkConfig, cell: Cell, result: CellResult) -> dict[str, Any]:
-    """The results row of an ``eval`` cell."""
-    key = dict(cell.key)
+def result_row(
+    config: BenchmarkConfig, cell: Cell, result: CellResult, dataset: CellResult | None = None
+) -> dict[str, Any]:
+    """The results row of an ``eval`` cell; ``dataset``: the result of the convert cell its
+    policy was trained from (for the number of distinct demos)."""
+    key = {"shift": 0.0, **dict(cell.key)}
     policy = config.policy(key["policy"])
     data = result.data if result.ok else {}
     durations = result.durations
@@ -60,6 +68,7 @@ def result_row(config: BenchmarkConfig, cell: Cell, result: CellResult) -> dict[
         "batch_size": policy.batch_size,
         "cameras": list(config.cameras_of(policy)),
         "depth": policy.depth,
+        "distinct_demos": (dataset.data if dataset is not None else {}).get("distinct_demos"),
         "collect_s": durations.get("collect_s"),
         "convert_s": durations.get("convert_s"),
         "train_s": durations.get("train_s"),
@@ -160,7 +169,12 @@ def average_stat(stats: Sequence[Stat | None]) -> Stat | None:
 
 
 def select(rows: Iterable[dict], **match: Any) -> list[dict]:
-    return [r for r in rows if all(r.get(k) == v for k, v in match.items())]
+    """The rows whose keys have the values given (a row without ``shift`` has shift 0)."""
+    return [
+        r
+        for r in rows
+        if all((r.get(k, 0.0) if k == "shift" else r.get(k)) == v for k, v in match.items())
+    ]
 
 
 # ----------------------------------------------------------------------------- tables
@@ -175,14 +189,57 @@ class TableData:
 
 
 def table_data(
-    rows: Sequence[dict], table: TableSpec, tasks: Sequence[str], demos: int
+    rows: Sequence[dict],
+    table: TableSpec,
+    tasks: Sequence[str],
+    demos: int,
+    shift: float = 0.0,
+    title: str | None = None,
 ) -> TableData:
+    """One table's numbers from the rows evaluated with object shift ``shift`` (0: seen)."""
     tasks = list(table.tasks or tasks)
     stats = []
     for policy, _label in table.rows:
-        line = [cell_stat(select(rows, policy=policy, task=t, demos=demos)) for t in tasks]
+        line = [
+            cell_stat(select(rows, policy=policy, task=t, demos=demos, shift=shift)) for t in tasks
+        ]
         stats.append([*line, average_stat(line)])
-    return TableData(table.title, [label for _, label in table.rows], tasks, stats)
+    labels = [label for _, label in table.rows]
+    return TableData(table.title if title is None else title, labels, tasks, stats)
+
+
+def distinct_demos(rows: Sequence[dict], task: str, demos: int) -> int | None:
+    """The distinct demo trajectories behind ``task``'s ``demos``-demo trainings (the most any
+    of its datasets has; None if no row knows)."""
+    counts = [
+        r["distinct_demos"]
+        for r in select(rows, task=task, demos=demos)
+        if r.get("distinct_demos") is not None
+    ]
+    return max(counts) if counts else None
+
+
+def generalisation_table(
+    seen: TableData, unseen: TableData, rows: Sequence[dict], demos: int
+) -> str:
+    """Seen and unseen-shift success side by side per task (``seen / unseen``), and a last row
+    with each task's distinct demo trajectories out of its demos."""
+    header = "| Policy \\ Task (seen / unseen) | " + " | ".join([*seen.tasks, "Average"]) + " |"
+    lines = [header, "|---|" + "---:|" * (len(seen.tasks) + 1)]
+    for label, seen_line, unseen_line in zip(seen.labels, seen.stats, unseen.stats, strict=True):
+        cells = [
+            f"{format_stat(a, average=i == len(seen_line) - 1)} / "
+            f"{format_stat(b, average=i == len(seen_line) - 1)}"
+            for i, (a, b) in enumerate(zip(seen_line, unseen_line, strict=True))
+        ]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    counts = [distinct_demos(rows, task, demos) for task in seen.tasks]
+    lines.append(
+        "| distinct demo trajectories | "
+        + " | ".join("-" if c is None else f"{c} of {demos}" for c in counts)
+        + " | |"
+    )
+    return "\n".join(lines)
 
 
 def format_stat(stat: Stat | None, average: bool = False) -> str:
@@ -241,6 +298,21 @@ def describe(config: BenchmarkConfig) -> str:
         "tasks of the task means (± population standard deviation across tasks), as the "
         f"paper's Table II. {config.demos} expert demos per task; [k/n] marks cells with "
         "failed or missing runs ([partial]: an average over such cells; see results.jsonl)."
+    ) + shifts(config)
+
+
+def shifts(config: BenchmarkConfig) -> str:
+    """The object shifts of the demos and of the evaluations, in words."""
+    demos = (
+        f" Demos: objects shifted at random by up to {100 * config.collect_shift:g} cm per demo."
+        if config.collect_shift
+        else " Demos: each world's own placement (no random shift)."
+    )
+    if not config.eval_shift:
+        return demos + " Evaluated on the worlds' own placements only."
+    return demos + (
+        f" Unseen: the same worlds with objects shifted at random by up to "
+        f"{100 * config.eval_shift:g} cm, from seeds no demo used."
     )
 
 
@@ -260,6 +332,22 @@ def render_report(out: Path, config: BenchmarkConfig) -> list[Path]:
             plot(data, path)
             written.append(path)
             sections += [f"![{kind}]({path.name})", ""]
+        if config.eval_shift:
+            cm = f"{100 * config.eval_shift:g} cm"
+            unseen = table_data(
+                rows, table, config.tasks, config.demos, config.eval_shift, f"{data.title}, unseen"
+            )
+            path = report / f"bars_{table.name}_unseen.png"
+            plot_seen_unseen(data, unseen, path)
+            written.append(path)
+            sections += [
+                f"## {data.title}: seen vs unseen placements (shifts up to {cm})",
+                "",
+                generalisation_table(data, unseen, rows, config.demos),
+                "",
+                f"![seen vs unseen]({path.name})",
+                "",
+            ]
     failures = [r for r in rows if r["status"] != "ok" and r.get("failed_cell")]
     if failures:
         origins: dict[str, str] = {}
@@ -355,6 +443,42 @@ def plot_bars(data: TableData, path: Path) -> None:
     plt.close(fig)
 
 
+def plot_seen_unseen(seen: TableData, unseen: TableData, path: Path) -> None:
+    """Per task (and Average) a pair of bars per policy: seen (solid) and unseen (hatched)."""
+    import numpy as np
+
+    plt = _pyplot()
+    columns = [*seen.tasks, "Average"]
+    n = max(1, len(seen.labels))
+    width = 0.8 / n
+    fig, ax = plt.subplots(figsize=(1.4 * len(columns) * max(1, n / 3) + 2, 3.5))
+    x = np.arange(len(columns))
+    for i, label in enumerate(seen.labels):
+        offset = x + (i - (n - 1) / 2) * width
+        for stats, part, hatch in ((seen, 0, None), (unseen, 1, "//")):
+            row = stats.stats[i]
+            means = [s.mean if s is not None and s.n_seeds else 0.0 for s in row]
+            stds = [s.std if s is not None and s.n_seeds else 0.0 for s in row]
+            ax.bar(
+                offset + (part - 0.5) * width / 2,
+                means,
+                width / 2,
+                yerr=stds,
+                capsize=2,
+                hatch=hatch,
+                color=f"C{i}",
+                edgecolor="black" if hatch else None,
+                label=f"{label} ({'unseen' if part else 'seen'})",
+            )
+    ax.set_xticks(x, columns, rotation=30, ha="right")
+    ax.set_ylabel("success rate (%)")
+    ax.set_ylim(0, 105)
+    ax.set_title(f"{seen.title}: seen (solid) vs unseen placements (hatched)")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    _save(fig, path)
+    plt.close(fig)
+
+
 def _mean_std_by(points: Iterable[tuple[Any, float]]) -> tuple[list, list[float], list[float]]:
     grouped: dict[Any, list[float]] = defaultdict(list)
     for x, y in points:
@@ -406,6 +530,7 @@ def plot_data_size(rows: Sequence[dict], path: Path) -> bool:
     """Success vs number of demos (seeds pooled over worlds as in the tables), a panel per
     policy, a line per task; False (nothing written) when no cell has two demo counts."""
     series: dict[tuple[str, str], list[tuple[int, float]]] = defaultdict(list)
+    rows = select(rows, shift=0.0)
     for policy, task in sorted({(r["policy"], r["task"]) for r in rows}):
         for demos in sorted({r["demos"] for r in select(rows, policy=policy, task=task)}):
             rates, _, _ = seed_rates(select(rows, policy=policy, task=task, demos=demos))

@@ -252,7 +252,8 @@ def _write_outputs(config: BenchmarkConfig, cells: dict[str, Cell], summary: Sum
     rows = {row_key(r): r for r in read_jsonl(out / RESULTS_FILE)}
     for cid, cell in cells.items():
         if cell.kind == "eval" and cid in summary.results:
-            row = result_row(config, cell, summary.results[cid])
+            convert = cells[cell.upstream[0]].upstream[0]  # eval <- train <- convert
+            row = result_row(config, cell, summary.results[cid], summary.results.get(convert))
             rows[row_key(row)] = row
     write_jsonl(out / RESULTS_FILE, sorted(rows.values(), key=row_key))
     curves = []

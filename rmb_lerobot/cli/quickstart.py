@@ -4,7 +4,8 @@
 2. ``rmb-convert to-lerobot``: the episodes become one LeRobotDataset v3;
 3. ``lerobot-train``: LeRobot's ACT (no pretrained backbone, small images) on that dataset,
    with ``--env.type=rmb_ur5e_<task>`` so the policy's inputs are checked against the env;
-4. ``lerobot-eval``: the trained checkpoint in the same env; success rate and videos.
+4. ``lerobot-eval``: the trained checkpoint in the same env; success rate and videos; then again
+   with the objects shifted at random (``--unseen-shift``), placements no demo showed.
 
 Every stage is the unmodified command-line tool, run as a subprocess and printed first so it can
 be re-run by hand; the defaults fit in about 15 minutes on a 2-core CPU.
@@ -31,7 +32,7 @@ TORCH_THREADS = 1  # per stage process, unless OMP_NUM_THREADS is set
 
 # What a run writes into --out: one folder per stage, and the marker that says the directory is
 # this tool's (so a later run may replace those folders, and only those).
-STAGE_DIRS = ("rmb", "dataset", "train", "eval")
+STAGE_DIRS = ("rmb", "dataset", "train", "eval", "eval_unseen")
 MARKER = ".rmb-quickstart"
 
 # The LeRobot entry points, by their console-script names (what the printed commands show).
@@ -192,11 +193,24 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
             f"--eval.n_episodes={args.eval_episodes}",
             f"--eval.batch_size={min(args.eval_episodes, args.workers)}",
             f"--eval.use_async_envs={'true' if args.workers > 1 else 'false'}",
-            f"--seed={args.seed + 1000}",  # not the training seed: unseen object shifts
+            f"--seed={args.seed + 1000}",  # no shift: the worlds the demos showed ("seen")
             f"--output_dir={out / 'eval'}",
         ],
     )
-    return [collect, convert, train, evaluate]
+    if not args.unseen_shift:
+        return [collect, convert, train, evaluate]
+    # The demos replay each world's own placement: the same evaluation with the objects
+    # shifted at random shows how the policy does on placements it has never seen.
+    unseen = Stage(
+        "lerobot-eval",
+        [
+            *[a for a in evaluate.args if not a.startswith(("--seed=", "--output_dir="))],
+            f"--env.random_shift={args.unseen_shift}",
+            f"--seed={args.seed + 2000}",
+            f"--output_dir={out / 'eval_unseen'}",
+        ],
+    )
+    return [collect, convert, train, evaluate, unseen]
 
 
 def checkpoint_dir(out: Path) -> Path:
@@ -218,20 +232,36 @@ def run(stage: Stage, index: int, total: int) -> float:
     return time.perf_counter() - start
 
 
-def report(out: Path, timings: dict[str, float]) -> list[str]:
-    """The summary: success rate, per-episode outcome, where the dataset, policy and videos are."""
-    info_path = out / "eval" / "eval_info.json"
+def read_eval(info_path: Path) -> tuple[dict, list[bool]]:
+    """``lerobot-eval``'s overall numbers and per-episode successes from its eval_info.json."""
     try:
         info = json.loads(info_path.read_text())
         overall = info["overall"]
     except (OSError, KeyError, json.JSONDecodeError) as error:
         raise SystemExit(f"rmb-quickstart: no evaluation result in {info_path}: {error}") from None
     successes = [s for task in info.get("per_task", []) for s in task["metrics"]["successes"]]
+    return overall, successes
+
+
+def report(out: Path, timings: dict[str, float], unseen_shift: float = 0.0) -> list[str]:
+    """The summary: success rate (on the demos' placements and, with ``unseen_shift``, on
+    placements shifted up to that many metres), where the dataset, policy and videos are."""
+    info_path = out / "eval" / "eval_info.json"
+    overall, successes = read_eval(info_path)
     videos = [Path(p) for p in overall.get("video_paths", [])]
     lines = [
         "",
         f"success rate: {overall['pc_success']:.1f} % ({sum(successes)}/{len(successes)} "
         f"episodes), mean return {overall['avg_sum_reward']:.2f}",
+    ]
+    if unseen_shift:
+        unseen, unseen_successes = read_eval(out / "eval_unseen" / "eval_info.json")
+        lines.append(
+            f"unseen:       {unseen['pc_success']:.1f} % ({sum(unseen_successes)}/"
+            f"{len(unseen_successes)} episodes) with objects shifted up to "
+            f"{100 * unseen_shift:g} cm (the demos: each world's own placement)"
+        )
+    lines += [
         f"dataset:      {(out / 'dataset').absolute()}",
         f"policy:       {checkpoint_dir(out).absolute()}",
         f"eval:         {info_path.absolute()}",
@@ -283,6 +313,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--batch-size", type=int, default=8, help="training batch size")
     parser.add_argument(
         "--eval-episodes", type=int, default=12, help="evaluation episodes (lerobot-eval)"
+    )
+    parser.add_argument(
+        "--unseen-shift",
+        type=float,
+        default=0.02,
+        help="evaluate again with objects shifted at random by up to this many metres, "
+        "placements no demo showed (0: skip)",
     )
     parser.add_argument(
         "--episode-length",
@@ -359,8 +396,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(str(error))
     timings = {}
     for index, stage in enumerate(stages, start=1):
-        timings[stage.name] = run(stage, index, len(stages))
-    print("\n".join(report(args.out, timings)))
+        # Both evaluations count as lerobot-eval.
+        timings[stage.name] = timings.get(stage.name, 0.0) + run(stage, index, len(stages))
+    print("\n".join(report(args.out, timings, args.unseen_shift)))
     return 0
 
 

@@ -30,8 +30,9 @@ def test_the_pipeline_is_the_four_unmodified_command_line_tools(tmp_path):
         "rmb-convert",
         "lerobot-train",
         "lerobot-eval",
+        "lerobot-eval",  # again on object placements no demo showed
     ]
-    collect, convert, train, evaluate = stages
+    collect, convert, train, evaluate, unseen = stages
     assert str(collect).startswith("rmb-collect MujocoUR5eDoor --episodes=30")
     assert str(convert).startswith(f"rmb-convert to-lerobot {tmp_path / 'rmb'}")
     for stage in (train, evaluate):  # trained and evaluated on the same env type and inputs
@@ -43,6 +44,15 @@ def test_the_pipeline_is_the_four_unmodified_command_line_tools(tmp_path):
         } <= set(stage.args)
     assert {"--policy.type=act", "--policy.pretrained_backbone_weights=null"} <= set(train.args)
     assert f"--policy.path={tmp_path}/train/checkpoints/last/pretrained_model" in evaluate.args
+    # The unseen evaluation: the same policy and env, objects shifted 2 cm, its own seeds.
+    assert set(evaluate.args) - set(unseen.args) == {"--seed=1001", f"--output_dir={tmp_path}/eval"}
+    assert set(unseen.args) - set(evaluate.args) == {
+        "--env.random_shift=0.02",
+        "--seed=2001",
+        f"--output_dir={tmp_path}/eval_unseen",
+    }
+    plain = pipeline(parse_args(["--out", str(tmp_path), "--unseen-shift=0"]))
+    assert [stage.name for stage in plain][-2:] == ["lerobot-train", "lerobot-eval"]
 
 
 def test_an_unknown_env_is_refused_before_anything_runs(tmp_path):
@@ -59,6 +69,9 @@ def test_main_job_end_to_end_at_a_tiny_size(tmp_path, capsys):
 
     printed = capsys.readouterr().out
     assert re.search(r"success rate: \d+\.\d % \([01]/1 episodes\)", printed)
+    assert re.search(
+        r"unseen: +\d+\.\d % \([01]/1 episodes\) with objects shifted up to 2 cm", printed
+    )
     episodes = sorted(p.name for p in (out / "rmb").iterdir())
     assert episodes == ["MujocoUR5eInsert_world0_000.rmb", "MujocoUR5eInsert_world1_001.rmb"]
     info = json.loads((out / "dataset" / "meta" / "info.json").read_text())
@@ -80,7 +93,7 @@ def _no_stages(monkeypatch) -> list[str]:
 
     ran: list[str] = []
     monkeypatch.setattr(quickstart, "run", lambda stage, index, total: ran.append(stage.name) or 0)
-    monkeypatch.setattr(quickstart, "report", lambda out, timings: [])
+    monkeypatch.setattr(quickstart, "report", lambda out, timings, unseen_shift=0.0: [])
     return ran
 
 
@@ -105,7 +118,7 @@ def test_a_rerun_into_its_own_out_replaces_only_its_stage_folders(tmp_path, monk
     ran = _no_stages(monkeypatch)
     out = tmp_path / "qs"
     assert main(["--out", str(out)]) == 0  # a new directory: made and marked
-    assert (out / ".rmb-quickstart").is_file() and len(ran) == 4
+    assert (out / ".rmb-quickstart").is_file() and len(ran) == 5
     for stage in ("rmb", "dataset", "train", "eval"):
         (out / stage / "sub").mkdir(parents=True)
         (out / stage / "sub" / "old").write_text("earlier run")
