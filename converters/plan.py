@@ -16,6 +16,7 @@ camera's depth is left out, with a warning).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -53,6 +54,10 @@ class ConvertOptions:
     skip: int = 1
     allow_non_finite: bool = False  # keep NaN/inf in low-dim keys (stats ignore them)
     allow_missing_depth: bool = False  # --depth: convert cameras whose depth file is missing
+    # Every other RMB key (eef poses, velocities, wrench, ...) as its own feature. Off: only
+    # state, action and the cameras, which LeRobot's loader reads faster (it materialises every
+    # column of each sampled row); from-lerobot then restores only those keys.
+    extra_keys: bool = True
 
     def __post_init__(self) -> None:
         if self.skip < 1:
@@ -274,6 +279,26 @@ def _hz(rate: float | None) -> str:
     return "an unknown rate (no 'time' key)" if rate is None else f"{rate:.6g} Hz"
 
 
+DEFAULT_STATE_KEYS = ConvertOptions.state_keys
+DEFAULT_ACTION_KEYS = ConvertOptions.action_keys
+
+
+def with_base_velocity(options: ConvertOptions, episode: Episode) -> ConvertOptions:
+    """The options with a mobile robot's base velocity added to the default state and action.
+
+    Episodes of a robot on a mobile base record ``measured_mobile_omni_vel`` and
+    ``command_mobile_omni_vel`` beside the joints; the default state and action (joints only)
+    then also take them, after the joints, so a dataset's vectors are what the env's
+    ``agent_pos`` and action hold. Keys given explicitly (not the defaults) are kept as given.
+    """
+    state, action = options.state_keys, options.action_keys
+    if state == DEFAULT_STATE_KEYS and K.MEASURED_MOBILE_OMNI_VEL in episode:
+        state = (*state, K.MEASURED_MOBILE_OMNI_VEL)
+    if action == DEFAULT_ACTION_KEYS and K.COMMAND_MOBILE_OMNI_VEL in episode:
+        action = (*action, K.COMMAND_MOBILE_OMNI_VEL)
+    return dataclasses.replace(options, state_keys=state, action_keys=action)
+
+
 def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> ConversionPlan:
     """Open and check every episode; raise before anything is written."""
     if not paths:
@@ -285,6 +310,7 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         with open_source(path, options.allow_non_finite, allow_missing) as episode:
             attrs = checked_attrs(episode.attrs, episode.format.hdf5_path(episode.path))
             if checker is None:
+                options = with_base_velocity(options, episode)
                 checker = _Checker(episode, options)
             rate = checker.check(episode)
             if options.depth:
@@ -310,6 +336,7 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         options.action_keys,
         checker.cameras,
         options.depth,
+        extra_keys=options.extra_keys,
     )
     return ConversionPlan(
         episodes=tuple(sources),

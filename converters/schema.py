@@ -147,19 +147,25 @@ def build_schema(
     action_keys: Sequence[str],
     cameras: Sequence[str],
     depth: bool,
+    *,
+    extra_keys: bool = True,
 ) -> DatasetSchema:
     """The schema for episodes whose low-dimensional keys have ``lowdim_shapes`` (``(T, ...)``).
 
     ``image_shapes`` maps the episode's RMB image keys to ``(height, width)``; a camera
     contributes its RGB stream if it has one and its depth stream if ``depth``. Pointcloud keys
-    are not converted: they are computed from depth and ``fovy``, which are kept.
+    are not converted: they are computed from depth and ``fovy``, which are kept. With
+    ``extra_keys`` false, no key outside state and action gets a feature of its own (a lean
+    dataset: LeRobot reads every column of each sampled row).
     """
     dims = {key: stored_dim(np.empty((0, *shape[1:]))) for key, shape in lowdim_shapes.items()}
     selected = set(state_keys) | set(action_keys)
     extra = tuple(
         key
         for key in lowdim_shapes
-        if not K.is_pointcloud_key(key) and (key not in selected or uses_policy_view(key))
+        if extra_keys
+        and not K.is_pointcloud_key(key)
+        and (key not in selected or uses_policy_view(key))
     )
     rgb = tuple(c for c in cameras if K.rgb_image_key(c) in image_shapes)
     depth_cameras = tuple(c for c in cameras if depth and K.depth_image_key(c) in image_shapes)

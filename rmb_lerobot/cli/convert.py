@@ -96,6 +96,16 @@ def _add_to_lerobot(sub) -> None:
         help="with --depth, convert a camera whose depth file is missing while other listed "
         "cameras have depth, without its depth (default: refuse the episode, naming the file)",
     )
+    to.add_argument(
+        "--extra-keys",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="keep every other RMB key (eef poses, velocities, wrench, fovy, ...) as its own "
+        "feature (default). --no-extra-keys writes only observation.state, action and the "
+        "cameras: LeRobot's loader reads every column of each sampled row, so a lean dataset "
+        "trains faster (benchmarks/RESULTS.md, 'Training data path'); from-lerobot then "
+        "restores only those keys",
+    )
     to.add_argument("--task", help="task text for every episode (default: its task_desc)")
     to.add_argument(
         "--fps",
@@ -257,6 +267,7 @@ def _to_lerobot(args) -> None:
         skip=args.skip,
         allow_non_finite=args.allow_non_finite,
         allow_missing_depth=args.allow_missing_depth,
+        extra_keys=args.extra_keys,
     )
     repo_id, root = to_lerobot(
         args.src,

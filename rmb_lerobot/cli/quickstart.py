@@ -169,6 +169,9 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
             f"--repo-id={repo_id}",
             f"--output={out / 'dataset'}",
             f"--workers={args.workers}",
+            # Only what ACT reads: LeRobot's loader reads every column of a sampled row
+            # (0.62x CPU per sample; benchmarks/RESULTS.md "Training data path").
+            "--no-extra-keys",
             "--overwrite",
         ],
     )

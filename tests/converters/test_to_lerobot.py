@@ -240,3 +240,20 @@ def test_library_temporaries_go_to_the_staging(demos, tmp_path, monkeypatch):
     to_lerobot([demos], output=root, options=ConvertOptions(camera_names=("hand",)), progress=False)
     assert seen and all(p.parent == tmp_path and p.name.startswith(".ds.tmp-") for p in seen)
     assert tempfile.tempdir == before
+
+
+def test_a_lean_dataset_gives_policies_the_same_samples(demos, tmp_path):
+    full, lean = tmp_path / "full", tmp_path / "lean"
+    to_lerobot([demos], output=full, progress=False)
+    to_lerobot([demos], output=lean, options=ConvertOptions(extra_keys=False), progress=False)
+    lean_meta = LeRobotDatasetMetadata("local/lean", root=lean)
+    policy_keys = {N.STATE, N.ACTION_KEY, *(N.image_key(c) for c in CAMERAS)}
+    assert set(lean_meta.features) < set(LeRobotDatasetMetadata("local/full", root=full).features)
+    assert {k for k in lean_meta.features if k.startswith(("observation", "action"))} == policy_keys
+    # What ACT samples (an action chunk): the same tensors from both, frame for frame.
+    delta = {N.ACTION_KEY: [i / RATE for i in range(8)]}
+    a, b = _load(full, delta_timestamps=delta), _load(lean, delta_timestamps=delta)
+    assert len(a) == len(b)
+    for index in (0, 7, len(a) // 2, len(a) - 1):
+        for key in policy_keys:
+            assert torch.equal(a[index][key], b[index][key]), (index, key)
