@@ -81,8 +81,12 @@ def env_steps_per_second(env: RmbEnv, steps: int, repeats: int = 1) -> tuple[flo
     return best, cpu_ms
 
 
-def _configurations(simulator: str) -> list[tuple[str, tuple[str, ...], tuple[int, int], bool]]:
-    """``(label, cameras, image size, depth)`` rows measured for a simulator."""
+def _configurations(
+    simulator: str, env_cameras: tuple[str, ...] = CAMERA_SETS[4]
+) -> list[tuple[str, tuple[str, ...], tuple[int, int], bool]]:
+    """``(label, cameras, image size, depth)`` rows measured for a simulator: MuJoCo envs with
+    ``front`` alone and with all ``env_cameras`` (the env's own: a robot without a hand camera
+    has three, a dual arm six)."""
     if simulator == "pybullet":
         tactile = ("tactile_left", "tactile_right")
         rows = []
@@ -92,10 +96,11 @@ def _configurations(simulator: str) -> list[tuple[str, tuple[str, ...], tuple[in
             rows.append(("2 tactile", tactile, size, False))
             rows.append(("front+tactile", ("front", *tactile), size, True))
         return rows
+    sets = (CAMERA_SETS[1], tuple(env_cameras))
     return [
-        (f"{n} camera{'s' if n > 1 else ''}", CAMERA_SETS[n], size, depth)
+        (f"{len(cameras)} camera{'s' if len(cameras) > 1 else ''}", cameras, size, depth)
         for size in SIZES
-        for n in (1, 4)
+        for cameras in sets
         for depth in (False, True)
     ]
 
@@ -140,7 +145,7 @@ def main() -> None:
         ("0 cameras", "-", "-", env_steps_per_second(base_env, args.steps * 10, args.repeats))
     )
     base_env.close()
-    for label, cameras, (width, height), depth in _configurations(entry.simulator):
+    for label, cameras, (width, height), depth in _configurations(entry.simulator, entry.cameras):
         start = time.perf_counter()
         env = entry.make(cameras=cameras, image_size=(width, height), depth=depth, **options)
         construct_again = time.perf_counter() - start

@@ -21,8 +21,15 @@ from rmb_lerobot.envs.registry import ENVS
 
 
 def success_rate(
-    task: str, episodes: int, random_shift: float, action_mode: str, cycle: bool = False
+    task: str,
+    episodes: int,
+    random_shift: float,
+    action_mode: str,
+    cycle: bool = False,
+    progress: bool = False,
 ) -> dict:
+    """Run the task's expert for ``episodes`` episodes; ``progress``: print one line per
+    episode as it ends, so a run stopped early still says how its episodes went."""
     entry = ENVS[task]
     env = entry.make(cameras=(), action_mode=action_mode)
     expert = entry.load_expert_class()(env)
@@ -41,6 +48,12 @@ def success_rate(
             if terminated:
                 break
         steps += env_steps
+        if progress:
+            print(
+                f"{task} {action_mode} episode {episode} world {options['world_idx']}: "
+                f"{'success' if info['is_success'] else 'failure'} in {env_steps} steps",
+                flush=True,
+            )
         if info["is_success"]:
             successes += 1
         else:
@@ -67,13 +80,21 @@ def main() -> None:
         action="store_true",
         help="pick: every instruction in turn, each across the worlds; prints per instruction",
     )
+    parser.add_argument(
+        "--progress", action="store_true", help="print each episode's outcome as it ends"
+    )
     args = parser.parse_args()
     print("| task | episodes | success rate | mean steps | seconds | failed episodes |")
     print("|------|----------|--------------|------------|---------|-----------------|")
     for task in args.tasks:
         start = time.perf_counter()
         result = success_rate(
-            task, args.episodes, args.random_shift, args.action_mode, args.cycle_instructions
+            task,
+            args.episodes,
+            args.random_shift,
+            args.action_mode,
+            args.cycle_instructions,
+            args.progress,
         )
         seconds = time.perf_counter() - start
         print(

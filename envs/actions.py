@@ -10,6 +10,11 @@ targets, then its gripper command; :meth:`~rmb_lerobot.envs.robots.Robot.joint_s
 - ``eef_rel``: per arm RMB's relative eef pose (6: translation + rotation vector) applied to
   the previous command's pose, then one gripper value per arm.
 
+A robot on a mobile base (:attr:`~rmb_lerobot.envs.robots.Robot.base`) has its base velocity
+``(vx, vy, wz)`` (base frame) as the last three numbers of every mode's action and of the
+command (:attr:`~rmb_lerobot.envs.robots.Robot.base_slice`), bounded by the base's limits; a
+fixed robot's actions and commands are the arm parts only.
+
 The eef modes ask an inverse kinematics function for the joints (the backend's, see
 :class:`CommandState`). The order of the eef modes' numbers (all poses, then all grippers) is
 RMB's key order: ``command_eef_pose`` then ``command_gripper_joint_pos``. Nothing here depends
@@ -65,6 +70,9 @@ class ActionMode(ABC):
         self.slices = robot.joint_slices()
         self.gripper_ranges = tuple(arm.gripper.command_range for arm in robot.arms)
         lower, upper = self._bounds(joint_limits)
+        if robot.base is not None:
+            base_low, base_high = robot.base.velocity_bounds
+            lower, upper = np.append(lower, base_low), np.append(upper, base_high)
         self.space = gym.spaces.Box(
             lower.astype(np.float32), upper.astype(np.float32), dtype=np.float32
         )
@@ -73,18 +81,29 @@ class ActionMode(ABC):
     def size(self) -> int:
         return int(self.space.shape[0])
 
+    @property
+    def arm_size(self) -> int:
+        """Numbers of the arm parts (the action without the base velocity)."""
+        return self.size - self.robot.layout.mobile_dim
+
     @abstractmethod
     def _bounds(
         self, joint_limits: Sequence[tuple[np.ndarray, np.ndarray]]
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of the action (float64; the space stores float32)."""
+        """Lower and upper bounds of the arm parts of the action (float64; the space stores
+        float32); the base velocity's bounds are appended from the record."""
 
     @abstractmethod
     def _command(self, action: np.ndarray, state: CommandState) -> np.ndarray:
-        """The command of a checked float64 action."""
+        """The joint vector of the arm parts of a checked float64 action."""
 
     def to_command(self, action: np.ndarray, state: CommandState) -> np.ndarray:
-        """The joint vector an action means (gripper values clipped to their range)."""
+        """The command an action means: the joint vector (gripper values clipped to their
+        range), then the base velocity clipped to the base's bounds when there is a base.
+
+        Raises:
+            ValueError: the action has the wrong shape or non-finite values.
+        """
         action = np.asarray(action, dtype=np.float64)
         if action.shape != self.space.shape:
             raise ValueError(
@@ -92,7 +111,11 @@ class ActionMode(ABC):
             )
         if not np.all(np.isfinite(action)):
             raise ValueError(f"action has non-finite values: {action}")
-        return self._command(action, state)
+        joints = self._command(action[: self.arm_size], state)
+        if self.robot.base is None:
+            return joints
+        low, high = self.robot.base.velocity_bounds
+        return np.concatenate([joints, np.clip(action[self.arm_size :], low, high)])
 
     def _gripper_bounds(self) -> tuple[list[float], list[float]]:
         return [lo for lo, _ in self.gripper_ranges], [hi for _, hi in self.gripper_ranges]
@@ -146,7 +169,7 @@ class _EefMode(ActionMode):
 
     def _command(self, action, state):
         n = len(self.robot.arms)
-        grippers = self._grippers(action[self.pose_dim * n :])
+        grippers = self._grippers(action[self.pose_dim * n : self.pose_dim * n + n])
         command = np.empty(self.robot.layout.num_joints)
         for i, (arm, grip) in enumerate(self.slices):
             part = action[self.pose_dim * i : self.pose_dim * (i + 1)]

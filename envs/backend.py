@@ -64,11 +64,13 @@ class Backend(ABC):
     @abstractmethod
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
         """Start an episode: the task's objects shifted by ``world_offset`` (world frame),
-        the robot at joint vector ``home`` and commanded to stay there."""
+        the robot at joint vector ``home`` and commanded to stay there (``home`` is a
+        command: for a robot on a mobile base it ends with a zero base velocity)."""
 
     @abstractmethod
     def apply_command(self, command: np.ndarray) -> None:
-        """Command joint targets (a joint vector); takes effect in :meth:`step`."""
+        """Command joint targets (a joint vector; for a robot on a mobile base followed by
+        the base velocity ``(vx, vy, wz)`` in the base frame); takes effect in :meth:`step`."""
 
     @abstractmethod
     def step(self) -> None:
@@ -95,6 +97,17 @@ class Backend(ABC):
     @abstractmethod
     def measured_wrench(self) -> np.ndarray:
         """Per arm the wrist force/torque (fx, fy, fz, nx, ny, nz) in the sensor frame."""
+
+    def measured_base_velocity(self) -> np.ndarray:
+        """The mobile base's velocity ``(vx, vy, wz)`` in its own frame (RMB's
+        ``measured_mobile_omni_vel``); asked only of backends whose robot has a base.
+
+        Raises:
+            NotImplementedError: this backend drives no mobile base.
+        """
+        raise NotImplementedError(
+            f"{type(self).__name__} drives no mobile base, but robot {self.robot.name!r} has one"
+        )
 
     def tactile(self) -> dict[str, np.ndarray]:
         """Tactile grids by RMB key (e.g. ``left_tactile_sensor``: ``(5, 8)`` normal forces in

@@ -126,7 +126,7 @@ class RmbEnv(gym.Env):
 
     # ------------------------------------------------------------------ spaces
     def _make_observation_space(self) -> gym.spaces.Dict:
-        n = self.robot.layout.num_joints
+        n = self.robot.layout.num_joints + self.robot.layout.mobile_dim
         spaces: dict[str, gym.spaces.Space] = {
             "agent_pos": gym.spaces.Box(-np.inf, np.inf, (n,), dtype=np.float32)
         }
@@ -254,6 +254,19 @@ class RmbEnv(gym.Env):
         """Wrist force/torque per arm (fx, fy, fz, nx, ny, nz) in the sensor frame."""
         return self.sim.measured_wrench()
 
+    def measured_base_velocity(self) -> np.ndarray | None:
+        """The mobile base's velocity ``(vx, vy, wz)`` in its frame; None for a fixed robot."""
+        if self.robot.base is None:
+            return None
+        return np.asarray(self.sim.measured_base_velocity(), dtype=np.float64)
+
+    def _agent_pos(self) -> np.ndarray:
+        """LeRobot's state: the measured joint vector, then the base velocity if there is a
+        base (what a converted dataset's ``observation.state`` holds by default)."""
+        measured = self.measured_joint_pos()
+        base = self.measured_base_velocity()
+        return measured if base is None else np.concatenate([measured, base])
+
     def _observe(self) -> dict[str, Any]:
         self._rgb, self._depth_m = {}, {}
         if self._optical_cameras:
@@ -262,7 +275,7 @@ class RmbEnv(gym.Env):
             )
         if self.tactile_names:
             self._rgb.update(self.sim.render_tactile(self.tactile_names))
-        obs: dict[str, Any] = {"agent_pos": self.measured_joint_pos().astype(np.float32)}
+        obs: dict[str, Any] = {"agent_pos": self._agent_pos().astype(np.float32)}
         if self.camera_names:
             obs["pixels"] = {cam: self._rgb[cam] for cam in self.camera_names}
             if self._depth_m:
@@ -277,7 +290,8 @@ class RmbEnv(gym.Env):
 
     @property
     def command(self) -> np.ndarray:
-        """The last applied joint command (per arm: joint targets, gripper)."""
+        """The last applied command (per arm: joint targets, gripper; then the base velocity
+        when the robot has a base)."""
         return self._command.copy()
 
     def fovy(self, camera: str) -> float:
@@ -299,19 +313,24 @@ class RmbEnv(gym.Env):
         command = self._command if action is None else self.command_from_action(action)
         previous = self._prev_command if action is None else self._command
         measured = self.measured_joint_pos()
+        joints = slice(0, self.robot.layout.num_joints)  # the command without a base velocity
         step: dict[str, Any] = {
             K.TIME: self.sim.time,
             K.REWARD: float(self._reward),
             K.MEASURED_JOINT_POS: measured,
-            K.COMMAND_JOINT_POS: command.copy(),
+            K.COMMAND_JOINT_POS: command[joints].copy(),
             K.MEASURED_JOINT_VEL: self.measured_joint_vel(),
-            K.COMMAND_JOINT_VEL: (command - previous) / self.control_dt,
+            K.COMMAND_JOINT_VEL: (command[joints] - previous[joints]) / self.control_dt,
             K.MEASURED_GRIPPER_JOINT_POS: measured[self._grippers],
             K.COMMAND_GRIPPER_JOINT_POS: command[self._grippers],
             K.MEASURED_EEF_POSE: self.eef_pose(measured),
             K.COMMAND_EEF_POSE: self.eef_pose(command),
             K.MEASURED_EEF_WRENCH: self.measured_wrench(),
         }
+        base = self.robot.base_slice
+        if base is not None:  # RMB's mobile keys, only for a robot on a base
+            step[K.MEASURED_MOBILE_OMNI_VEL] = self.measured_base_velocity()
+            step[K.COMMAND_MOBILE_OMNI_VEL] = command[base].copy()
         for cam, rgb in self._rgb.items():
             step[K.rgb_image_key(cam)] = rgb
         for cam, depth in self._depth_m.items():

@@ -30,7 +30,8 @@ DEFAULT_CAMERAS = ("front", "hand")  # RMB's default policy cameras for the UR5e
 
 
 def action_dim(action_mode: str, layout: K.RobotLayout = K.UR5E_LAYOUT) -> int:
-    """Numbers in one action of the given mode (see ``RmbEnv``'s action modes)."""
+    """Numbers in one action of the given mode (see ``RmbEnv``'s action modes): the arm
+    parts, then the base velocity for a robot on a mobile base."""
     dims = {
         "joint": layout.num_joints,
         "eef_abs": POLICY_POSE_DIM * layout.num_eefs + layout.num_grippers,
@@ -38,7 +39,7 @@ def action_dim(action_mode: str, layout: K.RobotLayout = K.UR5E_LAYOUT) -> int:
     }
     if action_mode not in dims:
         raise ValueError(f"action_mode must be one of {sorted(dims)}, got {action_mode!r}")
-    return dims[action_mode]
+    return dims[action_mode] + layout.mobile_dim
 
 
 @dataclass
@@ -74,7 +75,7 @@ class RmbEnvConfig(EnvConfig):
                 FeatureType.ACTION, (action_dim(self.action_mode, layout),)
             ),
             N.ENV_STATE_KEY: PolicyFeature(
-                FeatureType.STATE, (layout.num_joints + self._tactile_dim(),)
+                FeatureType.STATE, (layout.num_joints + layout.mobile_dim + self._tactile_dim(),)
             ),
         }
         self.features_map = {N.ACTION_KEY: N.ACTION_KEY, N.ENV_STATE_KEY: N.STATE}

@@ -224,6 +224,10 @@ ENVS: dict[str, EnvEntry] = {
         _entry("ring", "RingTask", "RingExpert", robot="xarm7", workspace=XARM_TABLE),
         _entry("pusht", "PushTTask", "PushTExpert", robot="xarm7", workspace=XARM_TABLE),
         _entry("cable", "CableTask", "CableExpert", robot="panda"),
+        # Arms generated from their makers' kinematics (no package ships them), on the Panda's
+        # stand by the UR5e's table, as RMB places them.
+        _entry("cable", "CableTask", "CableExpert", robot="kinova_gen3"),
+        _entry("cable", "CableTask", "CableExpert", robot="crx5ia"),
         _entry(
             "cable",
             "CableTask",

@@ -64,6 +64,9 @@ class Quantity(StrEnum):
     MOBILE_OMNI_VEL = "mobile_omni_vel"
 
 
+# Numbers of a mobile base velocity: (vx, vy, wz) in the base's own frame (m/s, m/s, rad/s).
+MOBILE_OMNI_VEL_DIM = 3
+
 # Quantities that have a ``_rel`` (difference from the previous step) variant.
 RELATIVE_QUANTITIES = (Quantity.JOINT_POS, Quantity.GRIPPER_JOINT_POS, Quantity.EEF_POSE)
 
@@ -73,12 +76,23 @@ class RobotLayout:
     """How many numbers a robot's keys hold.
 
     ``num_joints`` counts what ``*_joint_pos`` stores: arm joints plus one value per gripper
-    (a UR5e with a Robotiq gripper stores 6 + 1 = 7).
+    (a UR5e with a Robotiq gripper stores 6 + 1 = 7). A robot on a mobile base also records
+    its base velocity (``*_mobile_omni_vel``, ``mobile_dim`` numbers) apart from the joints.
     """
 
     num_joints: int
     num_grippers: int = 1
     num_eefs: int = 1
+    # Numbers of the mobile base's velocity (``*_mobile_omni_vel``): MOBILE_OMNI_VEL_DIM for a
+    # robot with a base, 0 for a fixed one.
+    mobile_dim: int = 0
+
+    def __post_init__(self) -> None:
+        if self.mobile_dim not in (0, MOBILE_OMNI_VEL_DIM):
+            raise ValueError(
+                f"RobotLayout mobile_dim must be 0 (no base) or {MOBILE_OMNI_VEL_DIM}, "
+                f"got {self.mobile_dim}"
+            )
 
     def arm_groups(self) -> tuple[tuple[range, range], ...]:
         """Per arm, the indices of its arm joints and of its gripper value(s) in a joint vector.
@@ -135,7 +149,7 @@ class KeySpec:
             return (REL_POSE_DIM if self.is_relative else POSE_DIM) * layout.num_eefs
         if self.quantity in (Quantity.EEF_VEL, Quantity.EEF_WRENCH):
             return 6 * layout.num_eefs
-        return 3  # MOBILE_OMNI_VEL: vx, vy, wz
+        return MOBILE_OMNI_VEL_DIM  # MOBILE_OMNI_VEL: vx, vy, wz
 
     def policy_dim(self, layout: RobotLayout) -> int:
         """Numbers per step as policies see them (absolute eef poses become 9 numbers)."""

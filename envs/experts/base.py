@@ -28,6 +28,7 @@ from scipy.spatial.transform import Rotation
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.scene import SceneState
+from rmb_lerobot.keys import MOBILE_OMNI_VEL_DIM
 from rmb_lerobot.pose import pose_to_policy, relative_pose
 
 
@@ -128,6 +129,11 @@ class ScriptedExpert(ABC):
     def on_reset(self) -> None:  # noqa: B027 - optional hook
         """Task-specific reset (called once the env state is known)."""
 
+    def base_velocity(self) -> np.ndarray:
+        """The base velocity ``(vx, vy, wz)`` (base frame) to command with this step's arm
+        target, for a robot on a mobile base (appended to the action); default: stand still."""
+        return np.zeros(MOBILE_OMNI_VEL_DIM)
+
     # ------------------------------------------------------------------ helpers
     def eef_world(self) -> tuple[np.ndarray, Rotation]:
         """Measured eef position and orientation in the world frame."""
@@ -192,6 +198,8 @@ class ScriptedExpert(ABC):
             action = np.append(pose_to_policy(pose), gripper)
         else:
             action = np.append(relative_pose(self.env.command_eef_pose, pose), gripper)
+        if self.env.robot.base is not None:
+            action = np.concatenate([action, self.base_velocity()])
         return action.astype(np.float32)
 
 

@@ -38,7 +38,7 @@ from rmb_lerobot.envs.experts.cable import CableExpert, Leg, Phase
 from rmb_lerobot.envs.experts.multi_arm import ArmTargets, MultiArmExpert
 from rmb_lerobot.envs.tasks.cable import POLE1, POLE2
 
-LEFT, RIGHT = 0, 1  # arm indices of the UR5E_DUAL record (envs/robots.py)
+LEFT, RIGHT = 0, 1  # arm indices of the UR5E_DUAL record (envs/robots/dual_ur5e.py)
 
 
 class RightCableArm(ArmTargets, CableExpert):

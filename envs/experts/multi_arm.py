@@ -23,6 +23,7 @@ import numpy as np
 
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.experts.base import ScriptedExpert
+from rmb_lerobot.keys import MOBILE_OMNI_VEL_DIM
 from rmb_lerobot.pose import POSE_DIM, pose_to_policy, relative_pose
 
 
@@ -70,6 +71,11 @@ class MultiArmExpert:
     def coordinate(self) -> None:
         """Called once a step before the arms' targets: hand over work between arms."""
 
+    def base_velocity(self) -> np.ndarray:
+        """The base velocity ``(vx, vy, wz)`` (base frame) to command with this step's arm
+        targets, for a robot on a mobile base (appended to the action); default: stand still."""
+        return np.zeros(MOBILE_OMNI_VEL_DIM)
+
     def reset(self) -> None:
         for arm in self.arms:
             arm.reset()
@@ -101,4 +107,6 @@ class MultiArmExpert:
             current = self.env.command_eef_pose.reshape(len(poses), POSE_DIM)
             rel = [relative_pose(c, p) for c, p in zip(current, poses, strict=True)]
             action = np.concatenate([*rel, grippers])
+        if self.env.robot.base is not None:
+            action = np.concatenate([action, self.base_velocity()])
         return action.astype(np.float32)

@@ -12,27 +12,17 @@ last centimetres to the grasp and to the floor are covered slowly (no overshoot)
 
 from __future__ import annotations
 
-from enum import Enum
-
 import numpy as np
 
-from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import top_down_rotation
+from rmb_lerobot.envs.experts.carry import CarryExpert, CarryPhase
 from rmb_lerobot.envs.tasks.pick import FINGER_REACH, PickTask, best_grasp_yaw, grasp_yaws
 
-
-class Phase(Enum):
-    ABOVE = "above"
-    DESCEND = "descend"
-    CLOSE = "close"
-    LIFT = "lift"
-    CARRY = "carry"
-    LOWER = "lower"
-    RELEASE = "release"
-    RETREAT = "retreat"
+Phase = CarryPhase  # Pick's phases are the carry sequence's
 
 
-class PickExpert(GripperExpert):
-    """Tool point: the gripper's pinch point."""
+class PickExpert(CarryExpert):
+    """Tool point: the gripper's pinch point; the carry sequence with Pick's hooks."""
 
     approach_height = 0.05  # pinch point above the tallest object on the way to a grasp (m)
     carry_clearance = 0.03  # object base above the objects on its way and the rims (m)
@@ -44,10 +34,6 @@ class PickExpert(GripperExpert):
     def on_reset(self) -> None:
         super().on_reset()
         task: PickTask = self.env.task
-        self.phase = Phase.ABOVE
-        self._grasp = np.zeros(3)  # pinch target while closing
-        self._place = np.zeros(3)  # pinch target while lowering into the basket
-        self._release = np.zeros(3)  # pinch target while opening
         self._obj = task.target_object
         self._basket = task.target_basket
         index = task.objects.index(self._obj)
@@ -55,7 +41,7 @@ class PickExpert(GripperExpert):
         yaw = best_grasp_yaw(index, positions, task.objects)
         yaw = grasp_yaws(self._obj)[0] if yaw is None else yaw
         _, eef_rot = self.eef_world()
-        self._rot = top_down_rotation(np.array([np.cos(yaw), np.sin(yaw), 0.0]), eef_rot)
+        self.rot = top_down_rotation(np.array([np.cos(yaw), np.sin(yaw), 0.0]), eef_rot)
         tallest = max(o.height for o in task.objects)
         self._transit_z = self.table_z() + tallest + self.approach_height
         self._carry_base_z = self._carry_height(positions, index)
@@ -88,10 +74,6 @@ class PickExpert(GripperExpert):
         slack = max(0.0, self._basket.inner[0] - half_x - self.wall_margin)
         return basket - np.array([slack, 0.0])
 
-    def _grasp_point(self) -> np.ndarray:
-        pos, rot = self.scene.body_pose(self._obj.body)
-        return pos + rot @ np.asarray(self._obj.grasp)
-
     def _over_basket(self, base_z: float) -> np.ndarray:
         """Pinch target that puts the object's base centre over the drop point at ``base_z``."""
         held = self.measured_tool() - self.scene.body_pose(self._obj.body)[0]
@@ -101,51 +83,36 @@ class PickExpert(GripperExpert):
         rel = self.scene.body_pose(self._obj.body)[0][:2] - self._drop
         return bool(np.max(np.abs(rel)) < tol)
 
-    # ------------------------------------------------------------------ phases
-    def waypoint(self) -> Waypoint:
-        self._track_tool_speed()
-        if self.phase is Phase.ABOVE:
-            grasp = self._grasp_point()
-            # Above the tallest object: the way there may pass over any of them.
-            target = np.array([*grasp[:2], self._transit_z])
-            if self.reached(target, 0.01):
-                self.phase = Phase.DESCEND
-            return Waypoint(target, self._rot, self.open_gripper)
-        if self.phase is Phase.DESCEND:
-            grasp = self._grasp_point()
-            if self._arrived(grasp, 0.003):
-                self.phase = Phase.CLOSE
-                self._grasp = grasp.copy()
-            return Waypoint(self._slowly(grasp, self.grasp_speed), self._rot, self.open_gripper)
-        if self.phase is Phase.CLOSE:
-            if self._gripper_settled():
-                self.phase = Phase.LIFT
-            return Waypoint(self._grasp, self._rot, self.closed_gripper)
-        if self.phase is Phase.LIFT:
-            target = np.array([*self._grasp[:2], self._over_basket(self._carry_base_z)[2]])
-            if self.reached(target, 0.01):
-                self.phase = Phase.CARRY
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.CARRY:
-            target = self._over_basket(self._carry_base_z)
-            # Only xy matters here (the lowering follows): near the edge of the arm's reach, the
-            # hand may hang a centimetre below a high carrying target.
-            still = self._tool_speed < self.still_speed
-            if self.reached(target, 0.01, xy_only=True) and still and self._object_over_drop(0.01):
-                self.phase = Phase.LOWER
-                floor = self.scene.body_pose(self._basket.body)[0][2] + self._basket.floor
-                self._place = self._over_basket(floor + self.drop_height)
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.LOWER:
-            if self._arrived(self._place, 0.005):
-                self.phase = Phase.RELEASE
-                self._count = 0
-                self._release = self._ref_pos.copy()
-            target = self._slowly(self._place, self.place_speed)
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.RELEASE:
-            if self._gripper_settled():
-                self.phase = Phase.RETREAT
-            return Waypoint(self._release, self._rot, self.open_gripper)
-        target = self._release + np.array([0.0, 0.0, self.approach_height])
-        return Waypoint(target, self._rot, self.open_gripper)
+    # ------------------------------------------------------------------ carry hooks
+    def grasp_point(self) -> np.ndarray:
+        """The object's grasp point (its record's, in the object's frame)."""
+        pos, rot = self.scene.body_pose(self._obj.body)
+        return pos + rot @ np.asarray(self._obj.grasp)
+
+    def above_grasp(self, grasp: np.ndarray) -> np.ndarray:
+        """Above the tallest object: the way there may pass over any of them."""
+        return np.array([*grasp[:2], self._transit_z])
+
+    def lift_target(self, grasp: np.ndarray) -> np.ndarray:
+        """Straight up until the object's base is at the carrying height."""
+        return np.array([*grasp[:2], self._over_basket(self._carry_base_z)[2]])
+
+    def carry_target(self) -> np.ndarray:
+        """The object's base centre over the drop point, at the carrying height."""
+        return self._over_basket(self._carry_base_z)
+
+    def ready_to_lower(self, target: np.ndarray) -> bool:
+        """Over the drop point and at rest, the object too. Only xy matters here (the lowering
+        follows): near the edge of the arm's reach, the hand may hang a centimetre below a
+        high carrying target."""
+        still = self._tool_speed < self.still_speed
+        return self.reached(target, 0.01, xy_only=True) and still and self._object_over_drop(0.01)
+
+    def place_target(self) -> np.ndarray:
+        """The object's base ``drop_height`` above the basket floor."""
+        floor = self.scene.body_pose(self._basket.body)[0][2] + self._basket.floor
+        return self._over_basket(floor + self.drop_height)
+
+    def placed(self) -> bool:
+        """At the place point and at rest."""
+        return self._arrived(self._place, 0.005)

@@ -13,28 +13,18 @@ are covered slowly, which keeps the integral correction from overshooting the gr
 
 from __future__ import annotations
 
-from enum import Enum
-
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rmb_lerobot.envs.experts.base import GripperExpert, Waypoint, top_down_rotation
+from rmb_lerobot.envs.experts.base import top_down_rotation
+from rmb_lerobot.envs.experts.carry import CarryExpert, CarryPhase
 from rmb_lerobot.envs.tasks.toolbox import HANDLE, MAT, MAT_TOP, TOOLBOX
 
-
-class Phase(Enum):
-    ABOVE = "above"
-    DESCEND = "descend"
-    CLOSE = "close"
-    LIFT = "lift"
-    CARRY = "carry"
-    LOWER = "lower"
-    RELEASE = "release"
-    RETREAT = "retreat"
+Phase = CarryPhase  # Toolbox's phases are the carry sequence's
 
 
-class ToolboxExpert(GripperExpert):
-    """Tool point: the gripper's pinch point."""
+class ToolboxExpert(CarryExpert):
+    """Tool point: the gripper's pinch point; the carry sequence with Toolbox's hooks."""
 
     approach_height = 0.08  # pre-grasp height of the pinch point above the bar (m)
     grasp_depth = 0.0  # pinch point below the bar's axis when closing (m)
@@ -44,12 +34,8 @@ class ToolboxExpert(GripperExpert):
 
     def on_reset(self) -> None:
         super().on_reset()
-        self.phase = Phase.ABOVE
-        self._grasp = np.zeros(3)  # pinch target while closing
-        self._place = np.zeros(3)  # pinch target while lowering onto the mat
-        self._release = np.zeros(3)  # pinch target while opening
         _, eef_rot = self.eef_world()
-        self._rot = self._grasp_rotation(eef_rot)
+        self.rot = self._grasp_rotation(eef_rot)
 
     def _grasp_rotation(self, current: Rotation) -> Rotation:
         """Fingers across the handle bar (perpendicular to its axis in the horizontal plane)."""
@@ -67,45 +53,31 @@ class ToolboxExpert(GripperExpert):
         box, mat = self.scene.body_pose(TOOLBOX)[0], self.scene.body_pose(MAT)[0]
         return bool(np.max(np.abs(box[:2] - mat[:2])) < tol)
 
-    # ------------------------------------------------------------------ phases
-    def waypoint(self) -> Waypoint:
-        self._track_tool_speed()
-        grasp = self.scene.geom_pose(HANDLE)[0] - np.array([0.0, 0.0, self.grasp_depth])
-        if self.phase is Phase.ABOVE:
-            target = grasp + np.array([0.0, 0.0, self.approach_height])
-            if self.reached(target, 0.01):
-                self.phase = Phase.DESCEND
-            return Waypoint(target, self._rot, self.open_gripper)
-        if self.phase is Phase.DESCEND:
-            if self._arrived(grasp, 0.003):
-                self.phase = Phase.CLOSE
-                self._grasp = grasp.copy()
-            return Waypoint(self._slowly(grasp, self.grasp_speed), self._rot, self.open_gripper)
-        if self.phase is Phase.CLOSE:
-            if self._gripper_settled():
-                self.phase = Phase.LIFT
-            return Waypoint(self._grasp, self._rot, self.closed_gripper)
-        if self.phase is Phase.LIFT:
-            target = np.array([*self._grasp[:2], self._over_mat(self.carry_clearance)[2]])
-            if self.reached(target, 0.01):
-                self.phase = Phase.CARRY
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.CARRY:
-            target = self._over_mat(self.carry_clearance)
-            if self._arrived(target, 0.01) and self._box_over_mat(0.005):
-                self.phase = Phase.LOWER
-                self._place = self._over_mat(self.place_height)
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.LOWER:
-            if self.env.task.is_success(self.scene):
-                self.phase = Phase.RELEASE
-                self._count = 0
-                self._release = self._ref_pos.copy()
-            target = self._slowly(self._place, self.place_speed)
-            return Waypoint(target, self._rot, self.closed_gripper)
-        if self.phase is Phase.RELEASE:
-            if self._gripper_settled():
-                self.phase = Phase.RETREAT
-            return Waypoint(self._release, self._rot, self.open_gripper)
-        target = self._release + np.array([0.0, 0.0, self.approach_height])
-        return Waypoint(target, self._rot, self.open_gripper)
+    # ------------------------------------------------------------------ carry hooks
+    def grasp_point(self) -> np.ndarray:
+        """On the handle bar's axis (``grasp_depth`` below it)."""
+        return self.scene.geom_pose(HANDLE)[0] - np.array([0.0, 0.0, self.grasp_depth])
+
+    def above_grasp(self, grasp: np.ndarray) -> np.ndarray:
+        """``approach_height`` above the bar."""
+        return grasp + np.array([0.0, 0.0, self.approach_height])
+
+    def lift_target(self, grasp: np.ndarray) -> np.ndarray:
+        """Straight up until the box's bottom is ``carry_clearance`` above the mat top."""
+        return np.array([*grasp[:2], self._over_mat(self.carry_clearance)[2]])
+
+    def carry_target(self) -> np.ndarray:
+        """The box over the mat centre, ``carry_clearance`` above it."""
+        return self._over_mat(self.carry_clearance)
+
+    def ready_to_lower(self, target: np.ndarray) -> bool:
+        """The hand at rest over the mat and the box hanging centred over it."""
+        return self._arrived(target, 0.01) and self._box_over_mat(0.005)
+
+    def place_target(self) -> np.ndarray:
+        """The box's bottom ``place_height`` above the mat top."""
+        return self._over_mat(self.place_height)
+
+    def placed(self) -> bool:
+        """The box rests on the mat (the task's success test)."""
+        return bool(self.env.task.is_success(self.scene))

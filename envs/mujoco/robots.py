@@ -92,6 +92,8 @@ MUJOCO_BUILDERS: dict[str, Callable[..., RobotModel]] = {
     "ur5e_dual": _builder("dual_ur5e", "build_dual_ur5e"),
     "xarm7": _builder("xarm7", "build_xarm7"),
     "panda": _builder("panda", "build_panda", mesh_options=False),
+    "kinova_gen3": _builder("kinova_gen3", "build_kinova_gen3"),
+    "crx5ia": _builder("crx5ia", "build_crx5ia"),
 }
 """Robot short name -> its MuJoCo model builder, called with the robot's record and keyword
 options (``visual_mesh_error``, ``mesh_cache``). Every builder takes the robot's facts (joints,

@@ -5,9 +5,10 @@ In-process: registration and LeRobot's own device-class lookup, the features, an
 and action round trip, refusals by the safety layer (NaN, missing keys), the watchdog resume,
 the dual arm stopping both arms. Then one test runs LeRobot's unmodified CLIs as a lab would:
 ``lerobot-record`` two episodes with the scripted teleoperator, ``lerobot-replay`` one,
-``lerobot-rollout --strategy.type=base`` a tiny ACT built on the recorded dataset's features
-and stats, and ``rmb-convert from-lerobot`` + ``rmb-data info`` on the recording. Offline,
-loopback only, HF_LEROBOT_HOME and the calibration directory in tmp.
+``lerobot-train`` a tiny ACT on the recording (its loss must fall), ``lerobot-rollout
+--strategy.type=base`` that trained policy, and ``rmb-convert from-lerobot`` + ``rmb-data
+info`` on the recording. Offline, loopback only, HF_LEROBOT_HOME and the calibration
+directory in tmp.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import json
 import logging
 import math
 import os
+import re
 import subprocess
 import sys
 import time
@@ -263,29 +265,22 @@ def test_dual_arm_round_trip_and_a_refusal_stops_both_arms(tmp_path):
 
 
 # ------------------------------------------------------------------ LeRobot's CLIs
-TINY_ACT = """
-import sys
-from pathlib import Path
-from lerobot.configs.types import FeatureType
-from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-from lerobot.policies.act.configuration_act import ACTConfig
-from lerobot.policies.act.modeling_act import ACTPolicy
-from lerobot.policies.factory import make_pre_post_processors
-from lerobot.utils.feature_utils import dataset_to_policy_features
-
-meta = LeRobotDatasetMetadata("local/rmb_twin", root=Path(sys.argv[1]))
-features = dataset_to_policy_features(meta.features)
-config = ACTConfig(
-    input_features={k: f for k, f in features.items() if f.type is not FeatureType.ACTION},
-    output_features={k: f for k, f in features.items() if f.type is FeatureType.ACTION},
-    pretrained_backbone_weights=None, dim_model=32, dim_feedforward=64, n_heads=2,
-    n_encoder_layers=1, n_decoder_layers=1, chunk_size=4, n_action_steps=4, use_vae=False,
-    device="cpu",
-)
-pre, post = make_pre_post_processors(config, dataset_stats=meta.stats)
-for part in (ACTPolicy(config), pre, post):
-    part.save_pretrained(sys.argv[2])
-"""
+TINY_ACT = [
+    "--policy.type=act",
+    "--policy.device=cpu",
+    "--policy.push_to_hub=false",
+    "--policy.pretrained_backbone_weights=null",  # no download
+    "--policy.dim_model=32",
+    "--policy.dim_feedforward=64",
+    "--policy.n_heads=2",
+    "--policy.n_encoder_layers=1",
+    "--policy.n_decoder_layers=1",
+    "--policy.chunk_size=4",
+    "--policy.n_action_steps=4",
+    "--policy.use_vae=false",
+    "--policy.optimizer_lr=3e-3",
+]
+TRAIN_STEPS = 20
 
 CLI_TIMEOUT_S = 600  # one CLI: ~25 s to start on an idle 2-core machine, minutes when loaded
 CAMERAS = (
@@ -331,7 +326,7 @@ def _finish(process: subprocess.Popen, tmp_path: Path, log: str) -> str:
     return text
 
 
-@pytest.mark.timeout(1800)  # three LeRobot CLIs and a policy build, on a loaded machine
+@pytest.mark.timeout(1800)  # four LeRobot CLIs, on a loaded machine
 def test_lerobot_record_replay_rollout_and_convert_on_the_twin(tmp_path, capsys):
     dataset = tmp_path / "dataset"
     record = _start(
@@ -374,13 +369,29 @@ def test_lerobot_record_replay_rollout_and_convert_on_the_twin(tmp_path, capsys)
         tmp_path,
         "replay.log",
     )
-    policy = tmp_path / "tiny_act"
-    subprocess.run(
-        [sys.executable, "-c", TINY_ACT, str(dataset), str(policy)],
-        check=True,
-        timeout=CLI_TIMEOUT_S,
-        env=_cli_env(tmp_path),
+    train = _start(
+        "train",
+        [
+            "--dataset.repo_id=local/rmb_twin",
+            f"--dataset.root={dataset}",
+            *TINY_ACT,
+            f"--steps={TRAIN_STEPS}",
+            "--batch_size=8",
+            f"--save_freq={TRAIN_STEPS}",
+            "--log_freq=5",
+            "--num_workers=0",
+            "--seed=0",
+            f"--output_dir={tmp_path / 'train'}",
+            "--wandb.enable=false",
+        ],
+        tmp_path,
+        "train.log",
     )
+    losses = [
+        float(x) for x in re.findall(r"loss:([0-9.]+)", _finish(train, tmp_path, "train.log"))
+    ]
+    assert len(losses) == TRAIN_STEPS // 5 and losses[-1] < losses[0], losses  # it learned
+    policy = tmp_path / "train" / "checkpoints" / "last" / "pretrained_model"
     rollout = _start(
         "rollout",
         [
