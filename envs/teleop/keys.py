@@ -30,6 +30,8 @@ import tty
 from collections.abc import Iterable, Sequence
 from typing import Any
 
+from rmb_lerobot.display import has_display
+
 ESC = "\x1b"
 # Escape sequences of the keys we name (xterm and VT100 cursor keys, both modes).
 ESCAPE_SEQUENCES = {
@@ -254,13 +256,6 @@ class NoKeySource:
 
     def close(self) -> None:
         """Nothing to release."""
-
-
-def has_display() -> bool:
-    """Whether a desktop session pynput can listen to exists."""
-    if sys.platform in ("darwin", "win32"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def stdin_is_terminal() -> bool:

@@ -18,36 +18,16 @@ only when a live view is asked for.
 
 from __future__ import annotations
 
-import os
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rmb_lerobot.display import has_display, import_rerun
 from rmb_lerobot.staging import Staging
 
 if TYPE_CHECKING:
     from rmb_lerobot.envs.teleop.session import TeleopSession
 
 _POSE_NAMES = ["x", "y", "z", "qw", "qx", "qy", "qz"]
-
-
-def import_rerun() -> Any:
-    """``rerun``, or an ImportError that names the extra to install."""
-    try:
-        import rerun
-    except ImportError as exc:
-        raise ImportError(
-            "--live-view needs rerun-sdk, in the viz extra: pip install 'lerobot_env_rmb[viz]' "
-            "(or pip install 'rerun-sdk>=0.24,<0.34')"
-        ) from exc
-    return rerun
-
-
-def has_display() -> bool:
-    """Whether a viewer window can open here (macOS/Windows, or an X11/Wayland display)."""
-    if sys.platform in ("darwin", "win32"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 class LiveView:
@@ -69,7 +49,7 @@ class LiveView:
             raise ValueError(f"--live-view {save}: the recording must be a .rrd file")
         if image_every < 1:
             raise ValueError(f"image_every must be >= 1, got {image_every}")
-        self.rr = import_rerun()
+        self.rr = import_rerun("--live-view")
         self.save = None if save is None else Path(save)
         self.image_every = image_every
         self.rec = self.rr.RecordingStream(app_id)

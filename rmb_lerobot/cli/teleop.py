@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rmb-teleop",
         formatter_class=DefaultsHelpFormatter,
-        description=__doc__.splitlines()[0].split(": ", 1)[1],
+        description=__doc__.splitlines()[0].split(": ", 1)[1].replace("``", ""),
         epilog=f"environments: {names} (short names like 'cable' work too). Each episode is "
         "built in a hidden temporary in --out and moved into place only when saved: a "
         "discarded episode, Esc or Ctrl-C leaves nothing. " + KEY_HELP.replace("\n", " "),
@@ -60,7 +60,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="output directory (default: dataset/<demo>_<YYYYmmdd_HHMMSS>, as RMB's)",
     )
-    parser.add_argument("--format", choices=["rmb", "hdf5"], default="rmb", dest="fmt")
+    parser.add_argument(
+        "--format",
+        choices=["rmb", "hdf5"],
+        default="rmb",
+        dest="fmt",
+        help="episode file format: RMB's compact .rmb or single-file .hdf5",
+    )
     parser.add_argument("--demo-name", default=None, help="file name prefix (default: the env's)")
     parser.add_argument(
         "--world-idx", type=int, nargs="+", default=None, help="worlds the episodes cycle through"
@@ -91,7 +97,14 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="cameras to record (default: all of the env's); none: no images",
     )
-    parser.add_argument("--image-size", type=int, nargs=2, default=[640, 480], metavar=("W", "H"))
+    parser.add_argument(
+        "--image-size",
+        type=int,
+        nargs=2,
+        default=[640, 480],
+        metavar=("W", "H"),
+        help="camera image width and height (sim envs)",
+    )
     parser.add_argument("--no-depth", action="store_true", help="record RGB only")
     parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
     parser.add_argument(

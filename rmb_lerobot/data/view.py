@@ -18,8 +18,6 @@ rerun is an optional dependency (the ``viz`` extra) imported only here.
 
 from __future__ import annotations
 
-import os
-import sys
 from pathlib import Path
 
 import cv2
@@ -27,6 +25,7 @@ import numpy as np
 from tqdm import tqdm
 
 from rmb_lerobot import keys as K
+from rmb_lerobot.display import has_display, import_rerun
 from rmb_lerobot.episode import Episode, open_episode
 from rmb_lerobot.errors import RmbFormatError
 from rmb_lerobot.staging import Staging
@@ -42,25 +41,6 @@ _DIM_NAMES = {
 }
 _REL_POSE_NAMES = ["tx", "ty", "tz", "roll", "pitch", "yaw"]
 _JOINT_QUANTITIES = (K.Quantity.JOINT_POS, K.Quantity.JOINT_VEL, K.Quantity.JOINT_TORQUE)
-
-
-def import_rerun():
-    """``rerun``, or an ImportError that says how to install it."""
-    try:
-        import rerun
-    except ImportError as exc:
-        raise ImportError(
-            "rmb-data view needs rerun-sdk: pip install 'lerobot_env_rmb[viz]' "
-            "(or pip install 'rerun-sdk>=0.24,<0.34')"
-        ) from exc
-    return rerun
-
-
-def has_display() -> bool:
-    """Whether a viewer window can open here (macOS/Windows, or an X11/Wayland display)."""
-    if sys.platform in ("darwin", "win32"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def is_tactile_key(key: str) -> bool:
@@ -217,7 +197,7 @@ def view_episode(
     :func:`has_display`), and otherwise the recording goes to ``<episode name>.rrd`` in the
     current directory. Returns the ``.rrd`` written, or None when only a viewer was fed.
     """
-    rr = import_rerun()
+    rr = import_rerun("rmb-data view")
     if stride < 1:
         raise ValueError(f"stride must be >= 1, got {stride}")
     path = Path(path)

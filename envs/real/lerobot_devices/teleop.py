@@ -8,7 +8,6 @@ import time
 from typing import Any
 
 import numpy as np
-from lerobot.teleoperators.teleoperator import Teleoperator
 from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 from rmb_lerobot.envs.real.lerobot_devices.config import RmbScriptedConfig
@@ -18,9 +17,10 @@ from rmb_lerobot.envs.real.lerobot_devices.features import (
     home_vector,
     single_arm_record,
 )
+from rmb_lerobot.envs.real.lerobot_devices.teleop_base import KeyedTeleoperator
 
 
-class RmbScripted(Teleoperator):
+class RmbScripted(KeyedTeleoperator):
     """Emits every action key of its robot type: home, or a slow wave about home.
 
     The motion's clock starts at :meth:`connect`, so every run replays the same trajectory
@@ -54,24 +54,9 @@ class RmbScripted(Teleoperator):
         self._t0: float | None = None
 
     @property
-    def action_features(self) -> dict[str, type]:
-        """Every action key of the robot type, as ``float``."""
-        return dict.fromkeys(self._keys, float)
-
-    @property
-    def feedback_features(self) -> dict[str, type]:
-        """None: the script takes no feedback."""
-        return {}
-
-    @property
     def is_connected(self) -> bool:
         """Whether :meth:`connect` started the script's clock."""
         return self._t0 is not None
-
-    @property
-    def is_calibrated(self) -> bool:
-        """Always: there is nothing to calibrate."""
-        return True
 
     def connect(self, calibrate: bool = True) -> None:
         """Start the motion's clock.
@@ -85,12 +70,6 @@ class RmbScripted(Teleoperator):
         if self.is_connected:
             raise DeviceAlreadyConnectedError(f"{self} is already connected")
         self._t0 = time.monotonic()
-
-    def calibrate(self) -> None:
-        """Nothing to calibrate."""
-
-    def configure(self) -> None:
-        """Nothing to configure."""
 
     def action_at(self, t: float) -> dict[str, float]:
         """The action ``t`` seconds after the start.
@@ -122,13 +101,6 @@ class RmbScripted(Teleoperator):
         if self._t0 is None:
             raise DeviceNotConnectedError(f"{self} is not connected; call connect() first")
         return self.action_at(time.monotonic() - self._t0)
-
-    def send_feedback(self, feedback: dict[str, Any]) -> None:
-        """Ignored: the script takes no feedback.
-
-        Args:
-            feedback: Anything.
-        """
 
     def disconnect(self) -> None:
         """Stop the clock.

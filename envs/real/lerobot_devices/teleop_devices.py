@@ -14,7 +14,6 @@ import time
 from typing import Any
 
 import numpy as np
-from lerobot.teleoperators.teleoperator import Teleoperator
 from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 from rmb_lerobot.envs.real.lerobot_devices.config import EE_VELOCITY_ACTIONS
@@ -27,6 +26,7 @@ from rmb_lerobot.envs.real.lerobot_devices.features import (
     arm_keys,
     single_arm_record,
 )
+from rmb_lerobot.envs.real.lerobot_devices.teleop_base import KeyedTeleoperator
 from rmb_lerobot.envs.teleop.gello import (
     GelloArmConfig,
     GelloConfig,
@@ -40,7 +40,7 @@ log = logging.getLogger(__name__)
 NOT_READY_LOG_PERIOD_S = 2.0
 
 
-class _DeviceTeleop(Teleoperator):
+class _DeviceTeleop(KeyedTeleoperator):
     """What both adapters share: the robot record, connection state, no feedback."""
 
     def __init__(self, config: Any):
@@ -53,32 +53,9 @@ class _DeviceTeleop(Teleoperator):
         self._device: Any = None
 
     @property
-    def feedback_features(self) -> dict[str, type]:
-        """None: the devices take no feedback."""
-        return {}
-
-    @property
     def is_connected(self) -> bool:
         """Whether the device is open."""
         return self._device is not None
-
-    @property
-    def is_calibrated(self) -> bool:
-        """Always: calibration is the config's (offsets, scales)."""
-        return True
-
-    def calibrate(self) -> None:
-        """Nothing to calibrate here (GELLO's offsets come from its config)."""
-
-    def configure(self) -> None:
-        """Nothing to configure."""
-
-    def send_feedback(self, feedback: dict[str, Any]) -> None:
-        """Ignored: no force feedback.
-
-        Args:
-            feedback: Anything.
-        """
 
     def _open_device(self, device: Any) -> None:
         if self.is_connected:
@@ -150,11 +127,6 @@ class RmbGello(_DeviceTeleop):
             gripper=None if gripper is None else (int(gripper[0]), gripper[1], gripper[2]),
             baudrate=config.baudrate,
         )
-
-    @property
-    def action_features(self) -> dict[str, type]:
-        """The robot's joint action keys, as ``float``."""
-        return dict.fromkeys(self._keys, float)
 
     @property
     def ready(self) -> bool:
@@ -231,11 +203,6 @@ class RmbSpacemouse(_DeviceTeleop):
         super().__init__(config)
         self._keys = arm_action_keys(self.record, EE_VELOCITY_ACTIONS)
         self._gripper = float(self._home[-1])
-
-    @property
-    def action_features(self) -> dict[str, type]:
-        """The robot's ``ee_velocity`` action keys, as ``float``."""
-        return dict.fromkeys(self._keys, float)
 
     def connect(self, calibrate: bool = True) -> None:
         """Open the SpaceMouse; the gripper command starts at the record's home.

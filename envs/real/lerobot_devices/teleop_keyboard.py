@@ -26,7 +26,6 @@ import os
 import pty
 from typing import Any
 
-from lerobot.teleoperators.teleoperator import Teleoperator
 from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 from rmb_lerobot.envs.real.lerobot_devices.config import EE_VELOCITY_ACTIONS, RmbKeyboardConfig
@@ -37,6 +36,7 @@ from rmb_lerobot.envs.real.lerobot_devices.features import (
     action_keys,
     single_arm_record,
 )
+from rmb_lerobot.envs.real.lerobot_devices.teleop_base import KeyedTeleoperator
 from rmb_lerobot.envs.teleop.device import KeySource
 from rmb_lerobot.envs.teleop.keyboard import KeyboardDevice, gripper_step_for
 
@@ -98,12 +98,8 @@ def open_key_source(kind: str) -> tuple[KeySource, StdinRouter | None]:
             (with pynput), named in the message.
         ImportError: ``pynput`` asked for without pynput installed.
     """
-    from rmb_lerobot.envs.teleop.keys import (
-        PynputKeySource,
-        TerminalKeySource,
-        has_display,
-        stdin_is_terminal,
-    )
+    from rmb_lerobot.display import has_display
+    from rmb_lerobot.envs.teleop.keys import PynputKeySource, TerminalKeySource, stdin_is_terminal
 
     if kind == "terminal" or (kind == "auto" and stdin_is_terminal()):
         if stdin_is_terminal():
@@ -135,7 +131,7 @@ def open_key_source(kind: str) -> tuple[KeySource, StdinRouter | None]:
     )
 
 
-class RmbKeyboard(Teleoperator):
+class RmbKeyboard(KeyedTeleoperator):
     """RMB's keyboard bindings emitting end-effector velocity actions.
 
     Per step it polls the key source once and returns, per arm, the twist that moves the
@@ -167,24 +163,9 @@ class RmbKeyboard(Teleoperator):
         self._router: StdinRouter | None = None
 
     @property
-    def action_features(self) -> dict[str, type]:
-        """Per arm the twist keys and ``gripper.pos`` (dual: prefixed ``left_`` / ``right_``)."""
-        return dict.fromkeys(self._keys, float)
-
-    @property
-    def feedback_features(self) -> dict[str, type]:
-        """None: it takes no feedback."""
-        return {}
-
-    @property
     def is_connected(self) -> bool:
         """Whether a key source is open."""
         return self._source is not None
-
-    @property
-    def is_calibrated(self) -> bool:
-        """Always: there is nothing to calibrate."""
-        return True
 
     def connect(self, calibrate: bool = True) -> None:
         """Open the key source (and take the terminal, see the module docstring).
@@ -200,12 +181,6 @@ class RmbKeyboard(Teleoperator):
             raise DeviceAlreadyConnectedError(f"{self} is already connected")
         self._source, self._router = open_key_source(self.config.keys)
         self.device.connect()
-
-    def calibrate(self) -> None:
-        """Nothing to calibrate."""
-
-    def configure(self) -> None:
-        """Nothing to configure."""
 
     def get_action(self) -> dict[str, Any]:
         """This step's action from the keys pressed since the last call.
@@ -251,13 +226,6 @@ class RmbKeyboard(Teleoperator):
                 action[prefix + key] = value
             action[prefix + GRIPPER_KEY] = float(self._gripper[arm])
         return action
-
-    def send_feedback(self, feedback: dict[str, Any]) -> None:
-        """Ignored: a keyboard takes no feedback.
-
-        Args:
-            feedback: Anything.
-        """
 
     def disconnect(self) -> None:
         """Close the key source and give standard input back.
