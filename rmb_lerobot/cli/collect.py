@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from tqdm import tqdm
 
 from rmb_lerobot.cli.help import DefaultsHelpFormatter
+from rmb_lerobot.cli.recording_args import add_recording_args
 from rmb_lerobot.codecs.depth import DEPTH_CODECS
 from rmb_lerobot.envs.registry import ENVS, entry_for
 from rmb_lerobot.errors import RmbFormatError
@@ -54,23 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="worlds to cycle through (default: every world of the task)",
     )
-    parser.add_argument(
-        "--cameras",
-        nargs="*",
-        default=None,
-        help="cameras to record, any of the env's (its scene's fixed cameras and its robot's, "
-        "e.g. front left right hand for the UR5e envs; default: all of them); none: no images",
-    )
-    parser.add_argument(
-        "--image-size",
-        type=int,
-        nargs=2,
-        default=[640, 480],
-        metavar=("W", "H"),
-        help="camera image width and height",
-    )
-    parser.add_argument("--no-depth", action="store_true", help="record RGB only")
-    parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
+    add_recording_args(parser)
     parser.add_argument(
         "--tactile",
         action="store_true",

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 from rmb_lerobot import keys as K
 from rmb_lerobot.cli.help import DefaultsHelpFormatter
+from rmb_lerobot.cli.recording_args import add_recording_args
 from rmb_lerobot.envs.registry import ENVS, REAL_ENVS, entry_for
 from rmb_lerobot.envs.teleop.devices import INPUT_DEVICES, make_device
 from rmb_lerobot.envs.teleop.keys import KEY_SOURCES, make_key_source
@@ -91,22 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--save-replay", action="store_true", help="record each replay")
     parser.add_argument("--seed", type=int, default=0, help="reset k uses seed + k")
-    parser.add_argument(
-        "--cameras",
-        nargs="*",
-        default=None,
-        help="cameras to record (default: all of the env's); none: no images",
-    )
-    parser.add_argument(
-        "--image-size",
-        type=int,
-        nargs=2,
-        default=[640, 480],
-        metavar=("W", "H"),
-        help="camera image width and height (sim envs)",
-    )
-    parser.add_argument("--no-depth", action="store_true", help="record RGB only")
-    parser.add_argument("--random-shift", type=float, default=0.0, help="metres, uniform")
+    add_recording_args(parser)
     parser.add_argument(
         "--no-antialias",
         action="store_true",
