@@ -9,9 +9,12 @@ MuJoCo-backed twins instead.
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -200,3 +203,32 @@ class FakeArm:
         """Record the close."""
         self.calls.append("close")
         self.closed = True
+
+
+def lerobot_cli_env(home: Path, **extra: str) -> dict[str, str]:
+    """The environment for running LeRobot's CLIs against the twins: offline, LeRobot's home
+    and calibration directory under ``home``, no wandb.
+
+    Args:
+        home: A scratch directory (a test's ``tmp_path``).
+        **extra: More variables (e.g. ``PYTHONPATH``).
+
+    Returns:
+        A copy of this process's environment with those set.
+    """
+    return {
+        **os.environ,
+        "HF_HUB_OFFLINE": "1",
+        "HF_LEROBOT_HOME": str(home / "hf_lerobot"),
+        "HF_LEROBOT_CALIBRATION": str(home / "calibration"),
+        "WANDB_MODE": "disabled",
+        **extra,
+    }
+
+
+def lerobot_cli_command(script: str) -> list[str]:
+    """``lerobot-<script>``: the console script beside this interpreter, else its module."""
+    exe = Path(sys.executable).with_name(f"lerobot-{script}")
+    if exe.exists():
+        return [str(exe)]
+    return [sys.executable, "-m", f"lerobot.scripts.lerobot_{script}"]

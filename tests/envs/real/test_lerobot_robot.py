@@ -16,10 +16,8 @@ from __future__ import annotations
 import json
 import logging
 import math
-import os
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -43,6 +41,7 @@ from rmb_lerobot.envs.real.lerobot_devices import (
 )
 from rmb_lerobot.envs.real.lerobot_devices.config import RmbArmConfig
 from rmb_lerobot.envs.real.lerobot_devices.features import action_keys, home_vector
+from rmb_lerobot.envs.real.testing import lerobot_cli_command, lerobot_cli_env
 from rmb_lerobot.envs.robots import UR5E, XARM7
 
 UR5E_KEYS = [f"{j}.pos" for j in UR5E.arms[0].joints] + ["gripper.pos"]
@@ -289,27 +288,13 @@ CAMERAS = (
 ROBOT = ["--robot.type=rmb_ur5e", "--robot.driver=sim", f"--robot.cameras={CAMERAS}"]
 
 
-def _cli_env(tmp_path: Path) -> dict[str, str]:
-    return {
-        **os.environ,
-        "HF_HUB_OFFLINE": "1",
-        "HF_LEROBOT_HOME": str(tmp_path / "hf_lerobot"),
-        "HF_LEROBOT_CALIBRATION": str(tmp_path / "calibration"),
-        "WANDB_MODE": "disabled",
-    }
-
-
 def _start(script: str, args: list[str], tmp_path: Path, log: str) -> subprocess.Popen:
     """Start ``lerobot-<script>`` (the console script installed beside this interpreter)."""
-    exe = Path(sys.executable).with_name(f"lerobot-{script}")
-    command = (
-        [str(exe)] if exe.exists() else [sys.executable, "-m", f"lerobot.scripts.lerobot_{script}"]
-    )
     with open(tmp_path / log, "w") as out:  # the child keeps its own descriptor
         return subprocess.Popen(
-            [*command, *args],
+            [*lerobot_cli_command(script), *args],
             cwd=tmp_path,
-            env=_cli_env(tmp_path),
+            env=lerobot_cli_env(tmp_path),
             stdout=out,
             stderr=subprocess.STDOUT,
         )

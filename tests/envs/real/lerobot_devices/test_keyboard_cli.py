@@ -14,7 +14,6 @@ import os
 import pty
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -24,6 +23,7 @@ import pytest
 
 from rmb_lerobot.envs.real.lerobot_devices.ee_action import build_arm_kinematics
 from rmb_lerobot.envs.real.lerobot_devices.features import EE_VELOCITY_KEYS
+from rmb_lerobot.envs.real.testing import lerobot_cli_command, lerobot_cli_env
 from rmb_lerobot.envs.robots import UR5E
 
 CLI_TIMEOUT_S = 600  # one CLI: ~25 s to start on an idle 2-core machine, minutes when loaded
@@ -40,12 +40,7 @@ TCP_LOG = re.compile(r"end effector (starts|ends) at (\[[^\]]*\]) m")
 
 
 def _env(tmp_path: Path) -> dict[str, str]:
-    env = {
-        **os.environ,
-        "HF_HUB_OFFLINE": "1",
-        "HF_LEROBOT_HOME": str(tmp_path / "hf_lerobot"),
-        "HF_LEROBOT_CALIBRATION": str(tmp_path / "calibration"),
-    }
+    env = lerobot_cli_env(tmp_path)
     env.pop("DISPLAY", None)  # headless: the terminal is the only keyboard
     env.pop("WAYLAND_DISPLAY", None)
     return env
@@ -58,10 +53,7 @@ def run_typing(script: str, args: list[str], tmp_path: Path, keys: list[tuple[st
     Returns:
         The combined output.
     """
-    exe = Path(sys.executable).with_name(f"lerobot-{script}")
-    command = (
-        [str(exe)] if exe.exists() else [sys.executable, "-m", f"lerobot.scripts.lerobot_{script}"]
-    )
+    command = lerobot_cli_command(script)
     log = tmp_path / f"{script}.log"
     master, slave = pty.openpty()
     try:

@@ -19,7 +19,6 @@ import math
 import os
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -30,6 +29,7 @@ import pytest
 pytest.importorskip("dynamixel_sdk", reason="extra gello (in `make setup`'s EXTRAS)")
 
 from rmb_lerobot.envs.real.lerobot_devices.features import action_keys, home_vector
+from rmb_lerobot.envs.real.testing import lerobot_cli_command, lerobot_cli_env
 from rmb_lerobot.envs.teleop.fakes.dynamixel import INST_SYNC_READ, FakeDynamixelChain
 from rmb_lerobot.envs.teleop.fakes.spacemouse import FakeState, write_module
 
@@ -57,26 +57,15 @@ def wait_for(condition, timeout_s: float, process: subprocess.Popen) -> bool:
     return condition()
 
 
-def cli_env(tmp_path: Path, **extra: str) -> dict[str, str]:
-    return {
-        **os.environ,
-        "HF_HUB_OFFLINE": "1",
-        "HF_LEROBOT_HOME": str(tmp_path / "hf_lerobot"),
-        "HF_LEROBOT_CALIBRATION": str(tmp_path / "calibration"),
-        "WANDB_MODE": "disabled",
-        **extra,
-    }
-
-
 def start_cli(script: str, args: list[str], tmp_path: Path, env: dict) -> subprocess.Popen:
     """Start ``lerobot-<script>`` (the console script beside this interpreter), logging to tmp."""
-    exe = Path(sys.executable).with_name(f"lerobot-{script}")
-    command = (
-        [str(exe)] if exe.exists() else [sys.executable, "-m", f"lerobot.scripts.lerobot_{script}"]
-    )
     with open(tmp_path / f"{script}.log", "w") as out:  # the child keeps its own descriptor
         return subprocess.Popen(
-            [*command, *args], cwd=tmp_path, env=env, stdout=out, stderr=subprocess.STDOUT
+            [*lerobot_cli_command(script), *args],
+            cwd=tmp_path,
+            env=env,
+            stdout=out,
+            stderr=subprocess.STDOUT,
         )
 
 
@@ -108,7 +97,7 @@ def test_lerobot_teleoperate_drives_the_twin_with_a_gello_on_a_pty(tmp_path):
             f"--teleop_time_s={TELEOP_TIME_S}",
             "--fps=30",
         ]
-        process = start_cli("teleoperate", args, tmp_path, cli_env(tmp_path))
+        process = start_cli("teleoperate", args, tmp_path, lerobot_cli_env(tmp_path))
         log = tmp_path / "teleoperate.log"
         try:
             # Connect pings each servo and aligns (one sync read); then one read per step.
@@ -159,7 +148,7 @@ def test_lerobot_record_with_a_spacemouse_moves_the_twin_and_converts(tmp_path, 
         "--play_sounds=false",
     ]
     paths = [str(shim), *filter(None, [os.environ.get("PYTHONPATH")])]
-    env = cli_env(tmp_path, PYTHONPATH=os.pathsep.join(paths))
+    env = lerobot_cli_env(tmp_path, PYTHONPATH=os.pathsep.join(paths))
     text = finish(start_cli("record", args, tmp_path, env), tmp_path, "record")
 
     info = json.loads((dataset / "meta" / "info.json").read_text())
