@@ -39,14 +39,11 @@ import numpy as np
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.models import robotiq_2f85
 from rmb_lerobot.envs.mujoco.models.common import (
-    ArmModel,
     RobotModel,
     StandBox,
     add_arm_servos,
-    add_ft_sensor,
-    mount,
 )
-from rmb_lerobot.envs.mujoco.models.generated import add_link_shapes
+from rmb_lerobot.envs.mujoco.models.generated import add_link_shapes, finish_2f85_arm, new_arm_spec
 from rmb_lerobot.envs.robots import Robot
 
 BASE_BODY = "base_link"
@@ -149,12 +146,7 @@ def build_crx5ia(
         raise ValueError(
             f"{robot.name}: the CRX-5iA has 6 joints, the record names {record.joints}"
         )
-    spec = mujoco.MjSpec()
-    spec.modelname = "crx5ia"
-    spec.compiler.autolimits = True
-    spec.compiler.degree = False  # joint ranges in radians (MjSpec's default is degrees)
-    spec.option.timestep = 0.004  # env_crx5ia_common.xml
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec = new_arm_spec("crx5ia")  # env_crx5ia_common.xml
     _build_arm(spec, record.joints, record.hand_frame)
     add_arm_servos(spec, record.joints, ACTUATORS, _GAINS)
 
@@ -166,18 +158,12 @@ def build_crx5ia(
     # The J6 housing touches the gripper housing at the faceplate.
     spec.add_exclude(bodyname1=JOINTS[-1][0], bodyname2=robotiq_2f85.BASE_BODY)
     spec.add_exclude(bodyname1=JOINTS[-1][0], bodyname2=robotiq_2f85.MOUNT_BODY)
-    force, torque = add_ft_sensor(spec, robotiq_2f85.MOUNT_BODY, record.wrench_frame)
-    mount(spec, BASE_BODY, record.root_frame, record.mount.pos, record.mount.quat)
-
-    arm = ArmModel(
-        record=record,
+    return finish_2f85_arm(
+        spec,
+        record,
+        model_name="crx5ia",
+        base_body=BASE_BODY,
         arm_actuators=ACTUATORS,
         gripper_actuator=gripper_actuator,
-        base_body=BASE_BODY,
-        force_sensor=force,
-        torque_sensor=torque,
-        hand_camera=None,
+        rmb_stand=RMB_STAND,
     )
-    x, y, _ = record.mount.pos
-    stand = StandBox(pos=(x, y, RMB_STAND.pos[2]), half_size=RMB_STAND.half_size)
-    return RobotModel("crx5ia", spec, (arm,), {}, stand=stand)

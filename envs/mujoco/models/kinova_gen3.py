@@ -41,15 +41,12 @@ import numpy as np
 from rmb_lerobot.envs.mujoco.meshes import DEFAULT_VISUAL_MESH_ERROR
 from rmb_lerobot.envs.mujoco.models import robotiq_2f85
 from rmb_lerobot.envs.mujoco.models.common import (
-    ArmModel,
     RobotModel,
     StandBox,
     add_arm_servos,
-    add_ft_sensor,
     euler_quat,
-    mount,
 )
-from rmb_lerobot.envs.mujoco.models.generated import add_link_shapes
+from rmb_lerobot.envs.mujoco.models.generated import add_link_shapes, finish_2f85_arm, new_arm_spec
 from rmb_lerobot.envs.robots import HandCamera, Robot
 
 BASE_BODY = "base_link"
@@ -172,12 +169,7 @@ def build_kinova_gen3(
         raise ValueError(
             f"{robot.name}: the Kinova Gen3 has 7 joints, the record names {record.joints}"
         )
-    spec = mujoco.MjSpec()
-    spec.modelname = "kinova_gen3"
-    spec.compiler.autolimits = True
-    spec.compiler.degree = False  # joint ranges in radians (MjSpec's default is degrees)
-    spec.option.timestep = 0.004  # env_kinovagen3_common.xml
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec = new_arm_spec("kinova_gen3")  # env_kinovagen3_common.xml
     _build_arm(spec, record.joints)
     add_arm_servos(spec, record.joints, ACTUATORS, _GAINS)
 
@@ -194,20 +186,13 @@ def build_kinova_gen3(
     )
     # The bracelet touches the gripper housing at the flange (the mount is its child: excluded).
     spec.add_exclude(bodyname1=record.hand_frame, bodyname2=robotiq_2f85.BASE_BODY)
-    force, torque = add_ft_sensor(spec, robotiq_2f85.MOUNT_BODY, record.wrench_frame)
     _add_hand_camera(bracelet, record.hand_camera)
-    mount(spec, BASE_BODY, record.root_frame, record.mount.pos, record.mount.quat)
-
-    arm = ArmModel(
-        record=record,
+    return finish_2f85_arm(
+        spec,
+        record,
+        model_name="kinova_gen3",
+        base_body=BASE_BODY,
         arm_actuators=ACTUATORS,
         gripper_actuator=gripper_actuator,
-        base_body=BASE_BODY,
-        force_sensor=force,
-        torque_sensor=torque,
-        hand_camera=record.hand_camera.name,
+        rmb_stand=RMB_STAND,
     )
-    x, y, _ = record.mount.pos
-    stand = StandBox(pos=(x, y, RMB_STAND.pos[2]), half_size=RMB_STAND.half_size)
-    camera = record.hand_camera.name
-    return RobotModel("kinova_gen3", spec, (arm,), {camera: camera}, stand=stand)
