@@ -10,52 +10,23 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from collections.abc import Sequence
-from typing import ClassVar
 
 import numpy as np
 import pytest
 
 from rmb_lerobot import keys as K
-from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
-from rmb_lerobot.envs.robots import Arm, Gripper, Pose, Robot
+from rmb_lerobot.envs.point_arm import PointArmBackend, PointScene, point_arm_robot
 from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import RMB_TABLE
 from rmb_lerobot.episode import EpisodeWriter, open_episode
 
-POINT_ARM = Robot(
-    name="point",
-    rmb_name="Point",
-    arms=(
-        Arm(
-            name="arm",
-            joints=("x", "y", "z"),
-            home=(0.0, 0.0, 0.5),
-            gripper=Gripper(joints=("finger",), open=0.0, closed=1.0, measured_scale=1.0),
-            mount=Pose(),
-            root_frame="base",
-            eef_frame="tip",
-            tcp_frame="tip",
-            hand_frame="tip",
-        ),
-    ),
-)
+POINT_ARM = point_arm_robot("point", home=(0.0, 0.0, 0.5))
 
 
-class PointScene(SceneState):
-    """The tip is the only body: its position is the arm's joint vector."""
-
-    def __init__(self, backend: FakeBackend) -> None:
-        self.backend = backend
-
-    def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        if name != "tip":
-            raise KeyError(name)
-        return self.backend.q[:3].copy(), np.eye(3)
-
-    geom_pose = site_pose = body_pose
+class JointScene(PointScene):
+    """The point scene, which also answers for the arm's joints (the tip's coordinates)."""
 
     def joint_position(self, name: str) -> np.ndarray:
         return self.backend.q[["x", "y", "z"].index(name)][None].copy()
@@ -63,56 +34,17 @@ class PointScene(SceneState):
     def joint_velocity(self, name: str) -> np.ndarray:
         return np.zeros(1)
 
-    def body_positions(self, names: Sequence[str]) -> np.ndarray:
-        return np.array([self.body_pose(n)[0] for n in names])
 
-    def points(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-
-class FakeBackend(Backend):
-    """A point arm in plain numpy: joints reach their command in one step; eef = joints."""
-
-    simulator: ClassVar[str] = "mujoco"  # names only (rmb_env_name); nothing MuJoCo is used
-    cameras = ("front",)
+class FakeBackend(PointArmBackend):
+    """The point arm with a fixed "camera" painting the joint vector, and depth."""
 
     def __init__(self, task: Task, with_scene: bool = True) -> None:
-        self.task, self.robot, self.workspace = task, POINT_ARM, task.workspace
-        self.image_size = (8, 6)
-        self.control_dt = 0.02
-        self.q = np.zeros(4)
-        self.target = np.zeros(4)
-        self.t = 0.0
-        self._scene = PointScene(self) if with_scene else None
+        super().__init__(task, POINT_ARM, control_dt=0.02)
+        self.with_scene = with_scene
 
     @property
     def scene(self) -> SceneState | None:
-        return self._scene
-
-    def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
-        self.q, self.target, self.t = home.copy(), home.copy(), 0.0
-
-    def apply_command(self, command: np.ndarray) -> None:
-        self.target = command.copy()
-
-    def step(self) -> None:
-        self.q, self.t = self.target.copy(), self.t + self.control_dt
-
-    @property
-    def time(self) -> float:
-        return self.t
-
-    def joint_limits(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        return ((np.full(3, -1.0), np.full(3, 1.0)),)
-
-    def measured_joint_pos(self) -> np.ndarray:
-        return self.q.copy()
-
-    def measured_joint_vel(self) -> np.ndarray:
-        return np.zeros(4)
-
-    def measured_wrench(self) -> np.ndarray:
-        return np.zeros(6)
+        return JointScene(self) if self.with_scene else None
 
     def render(self, cameras, *, rgb=True, depth=False):
         width, height = self.image_size
@@ -120,18 +52,6 @@ class FakeBackend(Backend):
         images = {c: np.full((height, width, 3), value, np.uint8) for c in cameras}
         depths = {c: np.full((height, width), 1.0, np.float32) for c in cameras} if depth else {}
         return (images if rgb else {}), depths
-
-    def fovy(self, camera: str) -> float:
-        return 45.0
-
-    def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:
-        return np.array([*q_arm[:3], 1.0, 0.0, 0.0, 0.0])
-
-    def ik(self, arm: int, target: np.ndarray, q_init: np.ndarray) -> np.ndarray:
-        return np.clip(target[:3], -1.0, 1.0)
-
-    def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
-        return np.array([*pos, 1.0, 0.0, 0.0, 0.0])
 
 
 class ReachTask(Task):

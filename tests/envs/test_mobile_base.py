@@ -12,8 +12,6 @@ puts the base velocity after the joints in the dataset's state and action.
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -21,11 +19,11 @@ from scipy.spatial.transform import Rotation
 from rmb_lerobot import keys as K
 from rmb_lerobot.converters import ConvertOptions
 from rmb_lerobot.converters.plan import plan_conversion
-from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.experts.base import ScriptedExpert, Waypoint
 from rmb_lerobot.envs.lerobot_config import action_dim
-from rmb_lerobot.envs.robots import Arm, BodyCamera, Gripper, MobileBase, Pose, Robot
+from rmb_lerobot.envs.point_arm import PointArmBackend, point_arm_robot
+from rmb_lerobot.envs.robots import BodyCamera, MobileBase, Pose
 from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import RMB_TABLE
@@ -37,108 +35,44 @@ BASE = MobileBase(
     max_linear_vel=0.2,
     max_angular_vel=0.5,
 )
-MOBILE_POINT = Robot(
-    name="mobile_point",
-    rmb_name="MobilePoint",
-    arms=(
-        Arm(
-            name="arm",
-            joints=("x", "y", "z"),
-            home=(0.3, 0.0, 0.5),
-            gripper=Gripper(joints=("finger",), open=0.0, closed=1.0, measured_scale=1.0),
-            mount=Pose(),
-            root_frame="base_link",
-            eef_frame="tip",
-            tcp_frame="tip",
-            hand_frame="tip",
-        ),
-    ),
+MOBILE_POINT = point_arm_robot(
+    "mobile_point",
+    home=(0.3, 0.0, 0.5),
+    root_frame="base_link",
     base=BASE,
     body_cameras=(BodyCamera("head", parent="base_link", pose=Pose(pos=(0, 0, 1.0)), fovy=60.0),),
 )
 
 
-class MobileScene(SceneState):
-    """The tip, in the world: the base's planar pose applied to the arm's joint vector."""
+class MobileBackend(PointArmBackend):
+    """The point arm on a base that moves by its commanded velocity; the tip, in the world,
+    is the base's planar pose applied to the arm's joint vector."""
 
-    def __init__(self, backend: MobileBackend) -> None:
-        self.backend = backend
-
-    def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        if name != "tip":
-            raise KeyError(name)
-        x, y, yaw = self.backend.base_pose
-        turn = Rotation.from_euler("z", yaw).as_matrix()
-        return np.array([x, y, 0.0]) + turn @ self.backend.q[:3], turn
-
-    geom_pose = site_pose = body_pose
-
-    def joint_position(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-    def joint_velocity(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-    def body_positions(self, names) -> np.ndarray:
-        return np.array([self.body_pose(n)[0] for n in names])
-
-    def points(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-
-class MobileBackend(Backend):
-    """Joints reach their targets in one step; the base moves by its commanded velocity."""
-
-    simulator: ClassVar[str] = "mujoco"  # names only (rmb_env_name); nothing MuJoCo is used
     cameras = ("head",)
+    camera_fovy = 60.0
 
     def __init__(self, task: Task) -> None:
-        self.task, self.robot, self.workspace = task, MOBILE_POINT, task.workspace
-        self.image_size = (8, 6)
-        self.control_dt = 0.1
-        self.q = np.zeros(4)
-        self.command = np.zeros(7)
+        super().__init__(task, MOBILE_POINT, control_dt=0.1)
         self.base_pose = np.zeros(3)  # x, y, yaw in the world
         self.world_vel = np.zeros(3)  # the base's last velocity in the world frame
-        self.t = 0.0
-        self._scene = MobileScene(self)
 
-    @property
-    def scene(self) -> SceneState:
-        return self._scene
+    def poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        x, y, yaw = self.base_pose
+        turn = Rotation.from_euler("z", yaw).as_matrix()
+        return {"tip": (np.array([x, y, 0.0]) + turn @ self.q[:3], turn)}
 
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
-        self.q, self.command = home[:4].copy(), home.copy()
-        self.base_pose, self.world_vel, self.t = np.zeros(3), np.zeros(3), 0.0
-
-    def apply_command(self, command: np.ndarray) -> None:
-        self.command = command.copy()
+        super().reset(world_offset, home)
+        self.base_pose, self.world_vel = np.zeros(3), np.zeros(3)
 
     def step(self) -> None:
-        vx, vy, wz = self.command[self.robot.base_slice]
+        vx, vy, wz = self.target[self.robot.base_slice]
         yaw = self.base_pose[2]
         self.world_vel = np.array(
             [vx * np.cos(yaw) - vy * np.sin(yaw), vx * np.sin(yaw) + vy * np.cos(yaw), wz]
         )
         self.base_pose = self.base_pose + self.world_vel * self.control_dt
-        self.q = self.command[:4].copy()
-        self.t += self.control_dt
-
-    @property
-    def time(self) -> float:
-        return self.t
-
-    def joint_limits(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        return ((np.full(3, -1.0), np.full(3, 1.0)),)
-
-    def measured_joint_pos(self) -> np.ndarray:
-        return self.q.copy()
-
-    def measured_joint_vel(self) -> np.ndarray:
-        return np.zeros(4)
-
-    def measured_wrench(self) -> np.ndarray:
-        return np.zeros(6)
+        super().step()
 
     def measured_base_velocity(self) -> np.ndarray:
         """The world velocity turned into the base frame (what RMB's HSR env records)."""
@@ -147,20 +81,6 @@ class MobileBackend(Backend):
         return np.array(
             [vx * np.cos(yaw) + vy * np.sin(yaw), -vx * np.sin(yaw) + vy * np.cos(yaw), wz]
         )
-
-    def render(self, cameras, *, rgb=True, depth=False):
-        width, height = self.image_size
-        images = {c: np.zeros((height, width, 3), np.uint8) for c in cameras}
-        return (images if rgb else {}), {}
-
-    def fovy(self, camera: str) -> float:
-        return 60.0
-
-    def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:
-        return np.array([*q_arm[:3], 1.0, 0.0, 0.0, 0.0])
-
-    def ik(self, arm: int, target: np.ndarray, q_init: np.ndarray) -> np.ndarray:
-        return np.clip(target[:3], -1.0, 1.0)
 
     def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         x, y, yaw = self.base_pose

@@ -9,17 +9,13 @@ on a goal spot on the table.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import ClassVar
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.base import RmbEnv
 from rmb_lerobot.envs.experts.carry import CarryExpert, CarryPhase
-from rmb_lerobot.envs.robots import Arm, Gripper, Pose, Robot
+from rmb_lerobot.envs.point_arm import PointArmBackend, point_arm_robot
 from rmb_lerobot.envs.scene import SceneState
 from rmb_lerobot.envs.tasks.base import Task
 from rmb_lerobot.envs.workspace import RMB_TABLE
@@ -28,72 +24,25 @@ TOP = RMB_TABLE.table.top_z
 HALF = 0.02  # the box's half height (m)
 BOX_START = np.array([0.15, -0.1, TOP + HALF])
 GOAL = np.array([-0.1, 0.15])
-HAND = Robot(
-    name="hand",
-    rmb_name="Hand",
-    arms=(
-        Arm(
-            name="arm",
-            joints=("x", "y", "z"),
-            home=(0.0, 0.0, TOP + 0.3),
-            gripper=Gripper(joints=("finger",), open=0.0, closed=1.0, measured_scale=1.0),
-            mount=Pose(),
-            root_frame="world",
-            eef_frame="pinch",
-            tcp_frame="pinch",
-            hand_frame="pinch",
-        ),
-    ),
-)
+HAND = point_arm_robot("hand", home=(0.0, 0.0, TOP + 0.3), root_frame="world", tip="pinch")
 
 
-class BoxScene(SceneState):
-    def __init__(self, backend: BoxBackend) -> None:
-        self.backend = backend
-
-    def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        positions = {"pinch": self.backend.q[:3], "box": self.backend.box}
-        return positions[name].copy(), np.eye(3)
-
-    geom_pose = site_pose = body_pose
-
-    def joint_position(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-    def joint_velocity(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-    def body_positions(self, names: Sequence[str]) -> np.ndarray:
-        return np.array([self.body_pose(n)[0] for n in names])
-
-    def points(self, name: str) -> np.ndarray:
-        raise KeyError(name)
-
-
-class BoxBackend(Backend):
+class BoxBackend(PointArmBackend):
     """The hand reaches its target in one step; the gripper moves 0.2 a step; a held box
     moves with the hand and, let go, rests on the table."""
 
-    simulator: ClassVar[str] = "mujoco"  # names only; nothing MuJoCo is used
-    cameras = ("front",)
+    joint_bound = 2.0
 
     def __init__(self, task: Task) -> None:
-        self.task, self.robot, self.workspace = task, HAND, task.workspace
-        self.image_size, self.control_dt = (8, 6), 0.05
-        self.q, self.target = np.zeros(4), np.zeros(4)
-        self.box, self.grip_offset, self.t = BOX_START.copy(), None, 0.0
-        self._scene = BoxScene(self)
+        super().__init__(task, HAND, control_dt=0.05)
+        self.box, self.grip_offset = BOX_START.copy(), None
 
-    @property
-    def scene(self) -> SceneState:
-        return self._scene
+    def poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        return {"pinch": (self.q[:3].copy(), np.eye(3)), "box": (self.box.copy(), np.eye(3))}
 
     def reset(self, world_offset: np.ndarray, home: np.ndarray) -> None:
-        self.q, self.target, self.t = home.copy(), home.copy(), 0.0
+        super().reset(world_offset, home)
         self.box, self.grip_offset = BOX_START + world_offset, None
-
-    def apply_command(self, command: np.ndarray) -> None:
-        self.target = command.copy()
 
     def step(self) -> None:
         self.q[:3] = self.target[:3]
@@ -109,34 +58,6 @@ class BoxBackend(Backend):
         else:
             self.box[2] = max(TOP + HALF, self.box[2] - 0.05)  # let go: it falls to the table
         self.t += self.control_dt
-
-    @property
-    def time(self) -> float:
-        return self.t
-
-    def joint_limits(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        return ((np.full(3, -2.0), np.full(3, 2.0)),)
-
-    def measured_joint_pos(self) -> np.ndarray:
-        return self.q.copy()
-
-    def measured_joint_vel(self) -> np.ndarray:
-        return np.zeros(4)
-
-    def measured_wrench(self) -> np.ndarray:
-        return np.zeros(6)
-
-    def render(self, cameras, *, rgb=True, depth=False):
-        return {c: np.zeros((6, 8, 3), np.uint8) for c in cameras}, {}
-
-    def fovy(self, camera: str) -> float:
-        return 45.0
-
-    def fk(self, arm: int, q_arm: np.ndarray) -> np.ndarray:
-        return np.array([*q_arm[:3], 1.0, 0.0, 0.0, 0.0])
-
-    def ik(self, arm: int, target: np.ndarray, q_init: np.ndarray) -> np.ndarray:
-        return target[:3].copy()
 
     def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         return np.array([*pos, *Rotation.from_matrix(rot).as_quat(scalar_first=True)])
