@@ -56,13 +56,29 @@ class Lane:
         self.obs, _, _, _, info = self.env.step(command)
         self.success = bool(info.get("is_success", False))
 
-    def open(self, path: Path, task_desc: str | None, depth_codec: str) -> None:
-        """Start an episode at ``path`` (built in a hidden temporary until :meth:`finish`)."""
+    def open(
+        self,
+        path: Path,
+        task_desc: str | None,
+        depth_codec: str,
+        *,
+        background_encoding: bool = True,
+    ) -> None:
+        """Start an episode at ``path`` (built in a hidden temporary until :meth:`finish`).
+
+        Args:
+            path: The episode's destination.
+            task_desc: Its ``task_desc`` (None: the task's own).
+            depth_codec: Depth video codec of the compact format.
+            background_encoding: Encode images on the writer's background thread.
+        """
         self.abort()
         attrs = {**self.env.rmb_attrs(), K.ATTR_DEMO_NAME: path.stem}
         if task_desc:
             attrs[K.ATTR_TASK_DESC] = task_desc
-        self.writer = EpisodeWriter(path, attrs, depth_codec=depth_codec)
+        self.writer = EpisodeWriter(
+            path, attrs, depth_codec=depth_codec, background_encoding=background_encoding
+        )
 
     def finish(self, save: bool, success_only: bool) -> tuple[Path | None, str]:
         """Move the episode into place (``save``, and a success if ``success_only``) or drop it.

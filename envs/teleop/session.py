@@ -79,6 +79,9 @@ class TeleopConfig:
         save_replay: Record each replay as an episode.
         replay_repeat: Replays before quitting.
         depth_codec: Depth video codec of the compact format.
+        background_encoding: Encode the compact format's images on a background thread
+            (the default; off encodes in the loop's thread, as before: the rate benchmark
+            measures both).
     """
 
     out: Path
@@ -96,6 +99,7 @@ class TeleopConfig:
     save_replay: bool = False
     replay_repeat: int = 1
     depth_codec: str = "rmb-videoio"
+    background_encoding: bool = True
 
 
 @dataclass
@@ -299,7 +303,12 @@ class TeleopSession:
         self._discard()
         for lane in self.lanes:
             path = self.next_path(lane.index)
-            lane.open(path, self.config.task_desc, self.config.depth_codec)
+            lane.open(
+                path,
+                self.config.task_desc,
+                self.config.depth_codec,
+                background_encoding=self.config.background_encoding,
+            )
 
     def next_path(self, lane: int = 0) -> Path:
         """Where lane ``lane``'s next episode goes: ``<demo>_world<idx>_<NNN>.<rmb|hdf5>``, NNN

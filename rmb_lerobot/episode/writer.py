@@ -2,10 +2,14 @@
 
 The writer streams images to their final encoding as steps arrive (video encoders for the
 compact variant, per-frame HDF5 chunks for the single-file variant), so a long episode never
-sits in RAM. Every HDF5 dataset is stored with HDF5's Fletcher-32 checksum filter (chunked, no
-compression: any HDF5 reader, the original RMB's included, reads it and fails on a damaged
-chunk instead of returning wrong values), and a compact episode records the SHA-256 of each
-of its video files in the ``video_sha256`` attribute (:mod:`rmb_lerobot.episode.digest`).
+sits in RAM. In the compact variant the encoders run on a background thread
+(:class:`~rmb_lerobot.episode.encode_worker.EncodeWorker`, on by default), so a recording loop
+renders and steps the next step while the previous frames are encoded; the files are
+byte-identical to encoding in the caller's thread. Every HDF5 dataset is stored with HDF5's
+Fletcher-32 checksum filter (chunked, no compression: any HDF5 reader, the original RMB's
+included, reads it and fails on a damaged chunk instead of returning wrong values), and a
+compact episode records the SHA-256 of each of its video files in the ``video_sha256``
+attribute (:mod:`rmb_lerobot.episode.digest`).
 
 Everything is written to a hidden temporary sibling (:class:`~rmb_lerobot.staging.Staging`)
 and moved into place only when :meth:`EpisodeWriter.close` succeeds: an exception, Ctrl-C or
@@ -34,6 +38,7 @@ from rmb_lerobot import keys as K
 from rmb_lerobot.codecs.depth import get_depth_codec, metres_to_mm, mm_to_metres
 from rmb_lerobot.codecs.video import RgbVideoWriter
 from rmb_lerobot.episode.digest import ATTR_VIDEO_SHA256, format_digests
+from rmb_lerobot.episode.encode_worker import DEFAULT_QUEUE_SIZE, EncodeWorker
 from rmb_lerobot.episode.layout import EpisodeFormat, episode_format, rgb_video_path
 from rmb_lerobot.errors import RmbFormatError
 from rmb_lerobot.pose import relative_pose_sequence
@@ -80,6 +85,13 @@ class EpisodeWriter:
     depth_codec:
         Depth video codec of the compact variant. The default ``rmb-videoio`` is what the
         original RMB reads; others are smaller but only this package reads them.
+    background_encoding:
+        Compact variant: encode the images on a background thread (same bytes, the caller's
+        thread freed for the next step). An encoder's error is raised by the next ``append``
+        or by ``close``. The single-file variant always writes in the caller's thread.
+    max_queued_images:
+        Images waiting for the background encoder at most; ``append`` waits beyond that
+        (bounds the memory when the caller is faster than the encoder).
     """
 
     def __init__(
@@ -94,6 +106,8 @@ class EpisodeWriter:
         rgb_crf: int = 23,
         rgb_preset: str = "medium",
         overwrite: bool = False,
+        background_encoding: bool = True,
+        max_queued_images: int = DEFAULT_QUEUE_SIZE,
     ):
         self.path = Path(path)
         self.format = episode_format(self.path)
@@ -105,6 +119,8 @@ class EpisodeWriter:
             raise RmbFormatError(
                 "destination exists (pass overwrite=True to replace it)", path=self.path
             )
+        if max_queued_images < 1:
+            raise ValueError(f"max_queued_images must be at least 1, got {max_queued_images}")
         self.attrs = dict(attrs or {})
         self.fk = fk
         self.derive_relative = derive_relative
@@ -117,6 +133,7 @@ class EpisodeWriter:
         self._encoders: dict[str, Any] = {}  # compact: image key -> video writer
         self._video_files: list[Path] = []  # compact: the finished videos, for their digests
         self._h5: h5py.File | None = None  # single file: open from the start for image chunks
+        self._worker: EncodeWorker | None = None  # compact + background: runs encoder writes
         self._num_steps = 0
         # The hidden temporary, locked for as long as this process records into it.
         self._staging = Staging(self.path)
@@ -129,6 +146,8 @@ class EpisodeWriter:
         except BaseException:
             self._staging.discard()
             raise
+        if self.format is EpisodeFormat.COMPACT and background_encoding:
+            self._worker = EncodeWorker(max_queued_images, name=f"encode {self.path.name}")
         self._closed = False
 
     # ------------------------------------------------------------------ recording
@@ -136,7 +155,15 @@ class EpisodeWriter:
         return self._num_steps
 
     def append(self, step: Mapping[str, Any]) -> None:
-        """Record one step: key -> value (scalars, vectors, images). Images are encoded now."""
+        """Record one step: key -> value (scalars, vectors, images).
+
+        Images are encoded now, or queued for the background encoder (copied, so the caller
+        may reuse its buffers).
+
+        Raises:
+            RmbFormatError: A bad key, value or shape (nothing of the step is recorded).
+            Exception: A background encoder's error from an earlier step.
+        """
         if self._closed:
             raise RmbFormatError("writer is closed", path=self.path)
         step = dict(step)
@@ -228,7 +255,10 @@ class EpisodeWriter:
                     target = self._tmp / f"{key}{self._depth_codec.file_suffix}"
                     encoder = self._depth_codec.writer(target, width, height)
                 self._encoders[key] = encoder
-            encoder.write(image)
+            if self._worker is None:
+                encoder.write(image)
+            else:
+                self._worker.submit(encoder.write, np.array(image, copy=True))
             return
         if K.is_depth_image_key(key):
             # The single-file variant stores depth as float32 metres, like the original.
@@ -303,6 +333,9 @@ class EpisodeWriter:
             self.abort()
             raise RmbFormatError("no steps were appended; nothing written", path=self.path)
         try:
+            if self._worker is not None:
+                self._worker.finish()  # every queued frame encoded (or its error raised)
+                self._worker = None
             for encoder in self._encoders.values():
                 encoder.close()
             self._video_files = [Path(encoder.path) for encoder in self._encoders.values()]
@@ -338,6 +371,9 @@ class EpisodeWriter:
 
     def abort(self) -> None:
         """Discard everything written so far; nothing appears at ``path``."""
+        if self._worker is not None:
+            self._worker.cancel()  # queued frames are dropped; the thread is joined
+            self._worker = None
         for encoder in self._encoders.values():
             with contextlib.suppress(Exception):
                 encoder.close()

@@ -36,7 +36,7 @@ from rmb_lerobot.envs.real.lerobot_devices.features import (
     action_keys,
     single_arm_record,
 )
-from rmb_lerobot.envs.real.lerobot_devices.teleop_base import KeyedTeleoperator
+from rmb_lerobot.envs.real.lerobot_devices.teleop_base import KeyedTeleoperator, RateCheck
 from rmb_lerobot.envs.teleop.device import KeySource
 from rmb_lerobot.envs.teleop.keyboard import KeyboardDevice, gripper_step_for
 
@@ -137,7 +137,8 @@ class RmbKeyboard(KeyedTeleoperator):
     Per step it polls the key source once and returns, per arm, the twist that moves the
     robot's end-effector target by the presses' steps in one loop period (``step * fps``;
     zero when no key was pressed) and the gripper command it tracks from
-    ``gripper_start`` (Z closes, X opens by RMB's 50 of 255).
+    ``gripper_start`` (Z closes, X opens by RMB's 50 of 255). A warning names ``--fps`` when
+    the loop polls it at another period than ``1 / fps`` (:class:`~.teleop_base.RateCheck`).
 
     Args:
         config: Robot type, loop rate, key source, gripper start.
@@ -161,6 +162,11 @@ class RmbKeyboard(KeyedTeleoperator):
         self._gripper = [start] * self._num_arms
         self._source: KeySource | None = None
         self._router: StdinRouter | None = None
+        self.rate_check = RateCheck(
+            self.name,
+            1.0 / float(config.fps),
+            "set --teleop.fps to the loop's --fps and the robot's command_duration_s to 1 / --fps",
+        )
 
     @property
     def is_connected(self) -> bool:
@@ -181,6 +187,7 @@ class RmbKeyboard(KeyedTeleoperator):
             raise DeviceAlreadyConnectedError(f"{self} is already connected")
         self._source, self._router = open_key_source(self.config.keys)
         self.device.connect()
+        self.rate_check.restart()
 
     def get_action(self) -> dict[str, Any]:
         """This step's action from the keys pressed since the last call.
@@ -193,6 +200,7 @@ class RmbKeyboard(KeyedTeleoperator):
         """
         if self._source is None:
             raise DeviceNotConnectedError(f"{self} is not connected; call connect() first")
+        self.rate_check.tick()
         keys = self._source.poll()
         if self._router is not None:
             self._router.forward(keys)

@@ -91,8 +91,8 @@ def test_configs_refuse_what_cannot_work():
         RmbGelloConfig(joint_offsets=OFFSETS)
     with pytest.raises(ValueError, match="joint_offsets"):
         RmbGelloConfig(port="/dev/ttyUSB0")
-    with pytest.raises(ValueError, match="one device drives one arm"):
-        RmbSpacemouseConfig(robot="rmb_ur5e_dual")
+    with pytest.raises(ValueError, match="one SpaceMouse each"):
+        RmbSpacemouseConfig(robot="rmb_ur5e_dual")  # two arms, no device paths
     with pytest.raises(ValueError, match=r"gripper is \[servo ID, open deg, closed deg\]"):
         RmbGelloConfig(port="/dev/ttyUSB0", joint_offsets=OFFSETS, gripper=[7, 200.0])
     with pytest.raises(ValueError, match="start_joints has 2 values"):
