@@ -58,6 +58,11 @@ class ConvertOptions:
     # state, action and the cameras, which LeRobot's loader reads faster (it materialises every
     # column of each sampled row); from-lerobot then restores only those keys.
     extra_keys: bool = True
+    # RGB cameras as LeRobot ``image`` features (PNG in the parquet rows) instead of AV1 videos:
+    # the episodes' own frames, losslessly, for ~7x the disk. Not faster to train on with action
+    # chunks in LeRobot 0.6.1 (it decodes the PNGs of every row a sample touches: ~1.9x loader CPU
+    # at 64x64; benchmarks/RESULTS.md, "Training data path"). Depth stays video.
+    image_features: bool = False
 
     def __post_init__(self) -> None:
         if self.skip < 1:
@@ -337,6 +342,7 @@ def plan_conversion(paths: Sequence[Path], options: ConvertOptions) -> Conversio
         checker.cameras,
         options.depth,
         extra_keys=options.extra_keys,
+        image_features=options.image_features,
     )
     return ConversionPlan(
         episodes=tuple(sources),

@@ -57,12 +57,19 @@ def to_lerobot(
 
     ``video_codec`` is LeRobot's RGB ``vcodec`` (default: LeRobot's, AV1), or ``"copy"`` to
     keep the episodes' H.264 packets (:mod:`.copy`); depth always uses LeRobot's depth encoder.
+    ``options.image_features`` stores RGB as LeRobot ``image`` features (lossless PNG in the
+    parquet rows) instead of video; ``video_codec`` then only matters for depth (not ``copy``).
     ``options.allow_non_finite`` keeps NaN/inf of low-dimensional keys (statistics then
     describe the finite values, :mod:`.stats`); by default such an episode is refused.
     """
     options = options or ConvertOptions()
     repo_id, root = resolve_destination(repo_id, output)
     prepare_destination(root, overwrite)
+    if video_codec == COPY and options.image_features:
+        raise ValueError(
+            "--video-codec copy keeps the episodes' RGB videos, --image-features stores RGB as "
+            "images: choose one"
+        )
     VideoSettings(video_codec).rgb_encoder()  # LeRobot's check of the codec name, before any work
     plan = plan_conversion(find_episodes(*sources), options)
     video = VideoSettings(video_codec, check_copyable(plan) if video_codec == COPY else None)

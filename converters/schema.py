@@ -3,8 +3,10 @@
 - ``observation.state`` / ``action``: the selected state / action keys concatenated in the
   order given (RMB's ``--state_keys`` / ``--action_keys``), absolute eef poses in the 9-number
   policy view, names ``<rmb key>.<component>``.
-- ``observation.images.<camera>``: RGB video; ``observation.images.<camera>_depth``: depth video
-  flagged ``is_depth_map`` (LeRobot's own depth encoder).
+- ``observation.images.<camera>``: RGB video, or with ``image_features`` a LeRobot ``image``
+  feature (lossless PNG bytes in the parquet rows: the episodes' own frames, no AV1 loss);
+  ``observation.images.<camera>_depth``: depth video flagged ``is_depth_map`` (LeRobot's own
+  depth encoder).
 - Every other low-dimensional key keeps its own feature (:func:`lerobot_names.rmb_feature_key`),
   stored as recorded; absolute eef poses that went into the state or action in the lossy policy
   view are kept raw as well, so a round trip restores them exactly.
@@ -26,6 +28,8 @@ from rmb_lerobot.converters.skip import skip_sequence
 from rmb_lerobot.pose import POSE_DIM, pose_to_policy
 
 FLOAT = "float32"
+VIDEO = "video"
+IMAGE = "image"  # LeRobot's dtype of images stored in the parquet rows (PNG bytes)
 _IMAGE_NAMES = ["height", "width", "channels"]
 
 
@@ -56,6 +60,7 @@ class DatasetSchema:
     depth_cameras: tuple[str, ...]
     image_shapes: Mapping[str, tuple[int, int]]  # RMB image key -> (height, width)
     layout: K.RobotLayout
+    rgb_dtype: str = VIDEO  # LeRobot dtype of the RGB cameras: VIDEO or IMAGE
 
     @property
     def lowdim_keys(self) -> tuple[str, ...]:
@@ -63,7 +68,7 @@ class DatasetSchema:
         return tuple(dict.fromkeys((*self.state_keys, *self.action_keys, *self.extra_keys)))
 
     def image_keys(self) -> dict[str, str]:
-        """Dataset video feature -> RMB image key."""
+        """Dataset image/video feature -> RMB image key."""
         keys = {N.image_key(c): K.rgb_image_key(c) for c in self.cameras}
         keys.update({N.depth_image_key(c): K.depth_image_key(c) for c in self.depth_cameras})
         return keys
@@ -89,14 +94,14 @@ class DatasetSchema:
         for camera in self.cameras:
             height, width = self.image_shapes[K.rgb_image_key(camera)]
             features[N.image_key(camera)] = {
-                "dtype": "video",
+                "dtype": self.rgb_dtype,
                 "shape": (height, width, 3),
                 "names": _IMAGE_NAMES,
             }
         for camera in self.depth_cameras:
             height, width = self.image_shapes[K.depth_image_key(camera)]
             features[N.depth_image_key(camera)] = {
-                "dtype": "video",
+                "dtype": VIDEO,
                 "shape": (height, width, 1),
                 "names": _IMAGE_NAMES,
                 "info": {"is_depth_map": True},
@@ -149,6 +154,7 @@ def build_schema(
     depth: bool,
     *,
     extra_keys: bool = True,
+    image_features: bool = False,
 ) -> DatasetSchema:
     """The schema for episodes whose low-dimensional keys have ``lowdim_shapes`` (``(T, ...)``).
 
@@ -156,7 +162,8 @@ def build_schema(
     contributes its RGB stream if it has one and its depth stream if ``depth``. Pointcloud keys
     are not converted: they are computed from depth and ``fovy``, which are kept. With
     ``extra_keys`` false, no key outside state and action gets a feature of its own (a lean
-    dataset: LeRobot reads every column of each sampled row).
+    dataset: LeRobot reads every column of each sampled row). With ``image_features`` the RGB
+    cameras are LeRobot ``image`` features instead of videos (depth stays video).
     """
     dims = {key: stored_dim(np.empty((0, *shape[1:]))) for key, shape in lowdim_shapes.items()}
     selected = set(state_keys) | set(action_keys)
@@ -178,4 +185,5 @@ def build_schema(
         depth_cameras=depth_cameras,
         image_shapes=dict(image_shapes),
         layout=infer_layout(dims),
+        rgb_dtype=IMAGE if image_features else VIDEO,
     )

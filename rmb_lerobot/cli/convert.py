@@ -106,6 +106,15 @@ def _add_to_lerobot(sub) -> None:
         "trains faster (benchmarks/RESULTS.md, 'Training data path'); from-lerobot then "
         "restores only those keys",
     )
+    to.add_argument(
+        "--image-features",
+        action="store_true",
+        help="store RGB cameras as LeRobot image features (PNG in the parquet rows) instead of "
+        "AV1 videos: the episodes' own frames, without AV1's loss, for ~7x the disk; not faster "
+        "to train on with action chunks (LeRobot decodes the images of every row a sample "
+        "touches; benchmarks/RESULTS.md, 'Training data path'). Depth stays video; not with "
+        "--video-codec copy",
+    )
     to.add_argument("--task", help="task text for every episode (default: its task_desc)")
     to.add_argument(
         "--fps",
@@ -268,6 +277,7 @@ def _to_lerobot(args) -> None:
         allow_non_finite=args.allow_non_finite,
         allow_missing_depth=args.allow_missing_depth,
         extra_keys=args.extra_keys,
+        image_features=args.image_features,
     )
     repo_id, root = to_lerobot(
         args.src,

@@ -184,6 +184,10 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
         batch_size=args.batch_size,
         seed=args.seed,
         log_every=max(1, args.steps // 20),
+        # One spawned worker keeps up with ACT's update on 2 cores: after its start-up (the first
+        # log window's data_s) data_s stays a few % of updt_s. RGB stays AV1 video: image
+        # features (--image-features) cost ~2x loader CPU per sample with action chunks in
+        # LeRobot 0.6.1 (benchmarks/data_path.py, RESULTS.md "Training data path").
         num_workers=1,
     )
     evaluate = Stage(
