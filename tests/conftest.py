@@ -226,11 +226,138 @@ def lerobot_cli():
 LEROBOT_CLI_TIMEOUT_S = 1200
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    for item in items:
-        uses_cli = "lerobot_cli" in getattr(item, "fixturenames", ())
-        if uses_cli and item.get_closest_marker("timeout") is None:
-            item.add_marker(pytest.mark.timeout(LEROBOT_CLI_TIMEOUT_S))
+def pytest_itemcollected(item: pytest.Item) -> None:
+    uses_cli = "lerobot_cli" in getattr(item, "fixturenames", ())
+    if uses_cli and item.get_closest_marker("timeout") is None:
+        item.add_marker(pytest.mark.timeout(LEROBOT_CLI_TIMEOUT_S))
+
+
+# ------------------------------------------------ scheduling under `pytest -n N` (pytest-xdist)
+# xdist's default (`--dist load`) hands each worker runs of consecutive tests, so a 200 s test
+# collected late starts late and leaves the other worker idle at the end, and a module's tests
+# may land on both workers, each building the module's fixtures (the benchmark grid: minutes).
+# Unless `--dist` is given, `-n N` here schedules units of work, slowest first (longest-
+# processing-time-first): a unit is a test module (its module-scoped fixtures are built once),
+# or a single test for the modules in SPLIT_MODULES (slow, independent tests; no costly module
+# fixture). A unit's cost is the sum of its tests' durations in the last run that ran them
+# (pytest's cache, kept by the controller), else the hints below, else a default. Costs only
+# order the work; nothing is asserted on them. (xdist's own `--dist loadgroup` cannot be used:
+# it renames nodeids through `item._nodeid`, which pytest 9 no longer reads.)
+SPLIT_MODULES = (
+    "tests/docs/test_code_blocks.py",
+    "tests/envs/real/lerobot_devices/test_keyboard_cli.py",
+    "tests/envs/real/lerobot_devices/test_teleop_devices_cli.py",
+    "tests/envs/real/test_lerobot_robot.py",
+    "tests/policies_extra/test_distributed.py",
+    "tests/policies_extra/test_flow_policy.py",
+    "tests/policies_extra/test_maniflow.py",
+    "tests/policies_extra/test_mlp.py",
+    "tests/policies_extra/test_sarnn.py",
+)
+SLOW_HINTS_S = {  # nodeid prefix -> seconds (setup + call + teardown) in a full `make test`
+    "tests/benchmark/test_runner.py::test_tiny_grid": 220.0,  # builds the module's grid
+    "tests/envs/real/test_lerobot_robot.py::test_lerobot_record_replay_rollout": 175.0,
+    "tests/docs/test_code_blocks.py::test_page_blocks_run[docs/policies.md]": 115.0,
+    "tests/docs/test_code_blocks.py::test_page_blocks_run[docs/teleop.md]": 120.0,
+    "tests/envs/real/lerobot_devices/test_keyboard_cli.py": 150.0,
+    "tests/envs/real/lerobot_devices/test_teleop_devices_cli.py": 150.0,
+    "tests/policies_extra/test_distributed.py::test_lerobot_train": 70.0,
+    "tests/benchmark/test_cluster.py": 70.0,
+}
+CLI_COST_S = 60.0  # a test that starts LeRobot's CLIs (`lerobot_cli`), when nothing is known
+DEFAULT_COST_S = 0.5
+DURATIONS_KEY = "rmb_lerobot/durations"  # pytest cache: {nodeid: seconds}, merged run to run
+SCHEDULE_KEY = "rmb_lerobot_schedule"  # in xdist's workerinput: order the tests by cost
+
+
+def _unit(nodeid: str) -> str:
+    """The unit of work a test belongs to: its module, or itself in SPLIT_MODULES."""
+    module = nodeid.split("::", 1)[0]
+    return nodeid if module in SPLIT_MODULES else module
+
+
+def _cost(item: pytest.Item, known: dict[str, float]) -> float:
+    if item.nodeid in known:
+        return known[item.nodeid]
+    hints = [s for prefix, s in SLOW_HINTS_S.items() if item.nodeid.startswith(prefix)]
+    if hints:
+        return max(hints)
+    return CLI_COST_S if "lerobot_cli" in getattr(item, "fixturenames", ()) else DEFAULT_COST_S
+
+
+def _scheduling(config: pytest.Config) -> bool:
+    """Whether our scheduling is on: ``-n N`` without ``--dist`` on xdist's controller; on a
+    worker (which re-parses the command line) the controller says so in ``workerinput``."""
+    workerinput = getattr(config, "workerinput", None)
+    if workerinput is not None:
+        return bool(workerinput.get(SCHEDULE_KEY))
+    explicit = any(
+        arg in ("--dist", "-d") or arg.startswith("--dist=")
+        for arg in config.invocation_params.args
+    )
+    return not explicit and config.getoption("dist", "no") == "load"
+
+
+class _DurationRecorder:
+    """Adds up each test's setup, call and teardown time; stores them in pytest's cache at the
+    end (on xdist's controller, which receives every worker's reports)."""
+
+    def __init__(self, cache: pytest.Cache) -> None:
+        self.cache = cache
+        self.durations: dict[str, float] = {}
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        self.durations[report.nodeid] = self.durations.get(report.nodeid, 0.0) + report.duration
+
+    def pytest_sessionfinish(self) -> None:
+        if self.durations:
+            known = self.cache.get(DURATIONS_KEY, {})
+            rounded = {k: round(v, 2) for k, v in self.durations.items()}
+            self.cache.set(DURATIONS_KEY, {**known, **rounded})
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    cache = getattr(config, "cache", None)
+    on_controller = not hasattr(config, "workerinput")
+    if on_controller and cache is not None and not config.getoption("collectonly"):
+        config.pluginmanager.register(_DurationRecorder(cache), "rmb_lerobot_durations")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node) -> None:
+    """xdist's controller, before starting a worker: tell it whether to order the tests."""
+    node.workerinput[SCHEDULE_KEY] = _scheduling(node.config)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """Hands out units of work (:func:`_unit`) in the workers' order (slowest first) as the
+    workers free up (xdist's loadscope scheduler with our units)."""
+    if not _scheduling(config):
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class CostOrderedScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _unit(nodeid)
+
+    config.option.loadscopereorder = False  # keep the workers' order
+    return CostOrderedScheduling(config, log)
+
+
+@pytest.hookimpl(trylast=True)  # after pytest's own reordering (by fixtures)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not _scheduling(config):
+        return
+    cache = getattr(config, "cache", None)
+    known = cache.get(DURATIONS_KEY, {}) if cache is not None else {}
+    unit_cost: dict[str, float] = {}
+    first: dict[str, int] = {}
+    for index, item in enumerate(items):
+        unit = _unit(item.nodeid)
+        unit_cost[unit] = unit_cost.get(unit, 0.0) + _cost(item, known)
+        first.setdefault(unit, index)
+    items.sort(key=lambda it: (-unit_cost[_unit(it.nodeid)], first[_unit(it.nodeid)]))
 
 
 @pytest.fixture(scope="session")
@@ -238,3 +365,36 @@ def make_expert_dataset():
     """``make_expert_dataset(task, root, world_idx=..., cameras=..., size=..., depth=...)``:
     scripted-expert demos converted to a LeRobotDataset (see ``_expert_dataset``)."""
     return _expert_dataset
+
+
+@pytest.fixture(scope="session")
+def shared_expert_dataset(tmp_path_factory):
+    """``shared_expert_dataset(task, world_idx=..., cameras=..., size=..., depth=...)``: as
+    ``make_expert_dataset``, but built once per test run for each set of arguments and shared
+    by every test and xdist worker that asks for it (a file lock in the run's temporary root).
+    READ-ONLY: a test that changes it copies it first."""
+    import hashlib
+    import json
+    import shutil
+
+    from filelock import FileLock
+
+    # Under xdist each worker's basetemp is <run root>/popen-gwN: the run root is shared.
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if base.name.startswith("popen-gw") else base
+    shared = root / "shared_expert_datasets"
+    shared.mkdir(exist_ok=True)
+
+    def _shared(task: str, **kwargs) -> Path:
+        spec = json.dumps({"task": task, **kwargs}, sort_keys=True, default=list)
+        done = shared / hashlib.sha256(spec.encode()).hexdigest()[:16]
+        with FileLock(f"{done}.lock"):
+            if not done.exists():
+                partial = Path(f"{done}.partial")
+                shutil.rmtree(partial, ignore_errors=True)
+                _expert_dataset(task, partial, **kwargs)
+                (partial / "spec.json").write_text(spec)
+                partial.rename(done)  # complete, or not there at all
+        return done / "dataset"
+
+    return _shared

@@ -147,11 +147,11 @@ DEPTH_WORLDS = (1, 4)  # episode i is world DEPTH_WORLDS[i], reset with seed i (
 
 
 @pytest.fixture(scope="session")
-def expert_depth_dataset(tmp_path_factory, make_expert_dataset) -> Path:
+def expert_depth_dataset(shared_expert_dataset) -> Path:
     """Two Insert demonstrations by the scripted expert (front camera, RGB + depth), converted
-    as ``rmb-convert to-lerobot --depth`` does: depth is ``observation.images.front_depth``."""
-    root = tmp_path_factory.mktemp("insert_depth")
-    return make_expert_dataset("insert", root, world_idx=DEPTH_WORLDS, size=DEPTH_SIZE, depth=True)
+    as ``rmb-convert to-lerobot --depth`` does: depth is ``observation.images.front_depth``.
+    Built once per run (DP3 and Flow Policy tests, any xdist worker); read-only."""
+    return shared_expert_dataset("insert", world_idx=DEPTH_WORLDS, size=DEPTH_SIZE, depth=True)
 
 
 @pytest.fixture

@@ -127,7 +127,7 @@ PLUGINS = {
 }
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")  # built once per worker: xdist runs these tests one by one
 def dataset(tmp_path_factory) -> Path:
     """Two synthetic episodes every plugin can train on: state, action, front RGB and depth.
 

@@ -35,10 +35,10 @@ TEXTS = ["Insert the square peg into the hole.", "Put the banana in the blue bas
 
 
 @pytest.fixture(scope="module")
-def converted(tmp_path_factory, make_expert_dataset) -> Path:
-    """One scripted Insert demo (front + hand cameras, 32x32) as ``rmb-convert`` writes it."""
-    root = tmp_path_factory.mktemp("smolvla_insert")
-    return make_expert_dataset("insert", root, cameras=("front", "hand"), size=32)
+def converted(shared_expert_dataset) -> Path:
+    """One scripted Insert demo (front + hand cameras, 32x32) as ``rmb-convert`` writes it;
+    built once per run for the VLA tests (pi0, SmolVLA, GR00T), read-only."""
+    return shared_expert_dataset("insert", cameras=("front", "hand"), size=32)
 
 
 @pytest.fixture(scope="module")
