@@ -13,6 +13,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+# Headless rendering, as `make test` exports it, also for a bare `pytest`: set before anything
+# imports MuJoCo (which picks its GL backend once, on import).
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"])
+
 import av
 import h5py
 import numpy as np
