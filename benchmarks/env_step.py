@@ -85,8 +85,9 @@ def _configurations(
     simulator: str, env_cameras: tuple[str, ...] = CAMERA_SETS[4]
 ) -> list[tuple[str, tuple[str, ...], tuple[int, int], bool]]:
     """``(label, cameras, image size, depth)`` rows measured for a simulator: MuJoCo envs with
-    ``front`` alone and with all ``env_cameras`` (the env's own: a robot without a hand camera
-    has three, a dual arm six)."""
+    ``front`` (or the first of ``env_cameras`` in a scene without one: ALOHA's overhead_cam)
+    alone and with all ``env_cameras`` (the env's own: a robot without a hand camera has three,
+    a dual arm six)."""
     if simulator == "pybullet":
         tactile = ("tactile_left", "tactile_right")
         rows = []
@@ -96,7 +97,7 @@ def _configurations(
             rows.append(("2 tactile", tactile, size, False))
             rows.append(("front+tactile", ("front", *tactile), size, True))
         return rows
-    sets = (CAMERA_SETS[1], tuple(env_cameras))
+    sets = (tuple(env_cameras[:1]), tuple(env_cameras))  # its first: front, where there is one
     return [
         (f"{len(cameras)} camera{'s' if len(cameras) > 1 else ''}", cameras, size, depth)
         for size in SIZES

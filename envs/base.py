@@ -51,7 +51,8 @@ class RmbEnv(gym.Env):
             offset; ``reset(options={"random_shift": s})`` overrides it for one episode.
         terminate_on_success: End the episode (``terminated``) when the success criterion holds.
         render_mode: ``"rgb_array"`` or None.
-        render_camera: The camera :meth:`render` shows.
+        render_camera: The camera :meth:`render` shows (None: ``front``, or the first camera
+            of a scene without one, as ALOHA's).
 
     Raises:
         ValueError: an unknown action mode, render mode or camera, or a negative shift.
@@ -70,7 +71,7 @@ class RmbEnv(gym.Env):
         random_shift: float = 0.0,
         terminate_on_success: bool = True,
         render_mode: str | None = "rgb_array",
-        render_camera: str = "front",
+        render_camera: str | None = None,
     ):
         if action_mode not in ACTION_MODES:
             raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
@@ -88,10 +89,13 @@ class RmbEnv(gym.Env):
         self.random_shift = float(random_shift)
         self.terminate_on_success = terminate_on_success
         self.render_mode = render_mode
-        self.render_camera = render_camera
         self.metadata = {**self.metadata, "render_fps": frames_per_second(backend.control_dt)}
 
         self.available_cameras = (*backend.cameras, *backend.tactile_sensors)
+        if render_camera is None:
+            has_front = "front" in self.available_cameras or not self.available_cameras
+            render_camera = "front" if has_front else self.available_cameras[0]
+        self.render_camera = render_camera
         cameras = self.available_cameras if cameras is None else tuple(cameras)
         for name in (*cameras, *([render_camera] if render_mode else [])):
             if name not in self.available_cameras:

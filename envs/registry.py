@@ -23,7 +23,10 @@ import gymnasium as gym
 from rmb_lerobot.envs.robots import ROBOTS, Robot, robot_for
 from rmb_lerobot.envs.simulators import SIMULATORS, load_target, rmb_env_name, simulator_for
 from rmb_lerobot.envs.workspace import (
+    ALOHA_TABLE,
     DUAL_TABLE,
+    G1_TABLE,
+    HSR_FLOOR,
     RMB_TABLE,
     TACTO_FLOOR,
     TACTO_SPOON_FLOOR,
@@ -228,6 +231,18 @@ ENVS: dict[str, EnvEntry] = {
         # stand by the UR5e's table, as RMB places them.
         _entry("cable", "CableTask", "CableExpert", robot="kinova_gen3"),
         _entry("cable", "CableTask", "CableExpert", robot="crx5ia"),
+        _entry("bottles", "BottlesTask", "BottlesExpert", robot="g1", workspace=G1_TABLE),
+        _entry("handover", "HandoverTask", "HandoverExpert", robot="aloha", workspace=ALOHA_TABLE),
+        _entry(
+            "cable",
+            "CableTask",
+            "AlohaCableExpert",
+            robot="aloha",
+            workspace=ALOHA_TABLE,
+            expert_module="aloha_cable",
+        ),
+        # The mobile HSR on the floor (generated from Toyota's published kinematics).
+        _entry("tidyup", "TidyUpTask", "TidyUpExpert", robot="hsr", workspace=HSR_FLOOR),
         _entry(
             "cable",
             "CableTask",

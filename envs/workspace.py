@@ -141,6 +141,54 @@ TACTO_SPOON_FLOOR = Workspace(
 )
 """The floor of RMB's TactoSawyerSpoon: its own front camera, 1 m from (0.8, 0, 0.05)."""
 
+G1_TABLE = Workspace(
+    name="g1_table",
+    # env_g1_bottles.xml: the ALOHA table turned by -90 deg about z at (-0.45, 0), its
+    # 1.22 x 0.74 m top at z = 0 with the floor at -0.75; here the floor is at 0. RMB's scene
+    # has no fixed camera (it records the robot's ``head``); ``front`` here faces the robot
+    # across the table (an overview for rendering and policies, 35 deg down).
+    table=Table(top_centre=(-0.45, 0.0, 0.75), half_size=(0.37, 0.61)),
+    cameras=(SceneCamera("front", pos=(0.25, 0.0, 1.45), lookat=(-0.75, 0.0, 0.75)),),
+)
+"""The table in front of RMB's Unitree G1 (the robot stands at x = -1.0 facing +x)."""
+
+# RMB's ALOHA scenes (aloha_table_body.xml, inside a body turned -90 deg about z): the same
+# 0.74 x 1.22 m table top at z = 0 over a floor at -0.75 (here the floor is at 0, so +0.75);
+# ``overhead_cam`` 1.03 m above the top, 0.30 m behind the centre, pitched 25 deg from straight
+# down; ``worms_eye_cam`` just above the top at the back edge, looking across it 5.4 deg up;
+# both RealSense D405 (focal 1.93 mm, sensor 2.14 mm high: fovy 58.0 deg).
+_D405_FOVY = float(np.degrees(2 * np.arctan(2.14 / 2 / 1.93)))
+ALOHA_TABLE = Workspace(
+    name="aloha_table",
+    table=Table(top_centre=(0.0, 0.0, 0.75), half_size=(0.37, 0.61)),
+    cameras=(
+        SceneCamera("overhead_cam", (-0.3038, 0.0, 1.7752), (0.1741, 0.0, 0.75), _D405_FOVY),
+        SceneCamera("worms_eye_cam", (-0.3772, 0.0, 0.7816), (0.6184, 0.0, 0.8759), _D405_FOVY),
+    ),
+)
+"""The table of RMB's MuJoCo ALOHA tasks (both arms stand on it, facing each other)."""
+
+HSR_FLOOR = Workspace(
+    name="hsr_floor",
+    # env_hsr_tidyup.xml: no table, the bottles and containers stand on the floor (the "table
+    # top" is the floor, z = 0, and the MuJoCo scene draws no table). RMB's scene has no fixed
+    # camera (it records the robot's ``head`` and ``hand``); ``front`` here looks at the robot
+    # over the containers (an overview for rendering and policies, 40 deg down).
+    table=Table(top_centre=(1.0, 0.0, 0.0), half_size=(1.0, 1.0)),
+    cameras=(SceneCamera("front", pos=(2.1, 0.0, 1.3), lookat=(0.55, 0.0, 0.0)),),
+)
+"""The floor of RMB's MuJoCo HSR TidyUp (the robot starts at the origin facing +x)."""
+
 WORKSPACES: dict[str, Workspace] = {
-    ws.name: ws for ws in (RMB_TABLE, XARM_TABLE, DUAL_TABLE, TACTO_FLOOR, TACTO_SPOON_FLOOR)
+    ws.name: ws
+    for ws in (
+        RMB_TABLE,
+        XARM_TABLE,
+        DUAL_TABLE,
+        TACTO_FLOOR,
+        TACTO_SPOON_FLOOR,
+        G1_TABLE,
+        ALOHA_TABLE,
+        HSR_FLOOR,
+    )
 }

@@ -19,6 +19,7 @@ import numpy as np
 
 from rmb_lerobot.envs.backend import Backend
 from rmb_lerobot.envs.mujoco.kinematics import ArmKinematics
+from rmb_lerobot.envs.mujoco.mobile_base import MobileBaseDrive, pose_in_body
 from rmb_lerobot.envs.mujoco.options import MujocoOptions
 from rmb_lerobot.envs.mujoco.render import MultiCameraRenderer, mujoco
 from rmb_lerobot.envs.mujoco.robots import build_robot_model, check_model
@@ -103,6 +104,7 @@ class MujocoBackend(Backend, SceneState):
         self._force_adr = tuple(model.sensor(m.force_sensor).adr[0] for m in arms)
         self._torque_adr = tuple(model.sensor(m.torque_sensor).adr[0] for m in arms)
         self._slices = robot.joint_slices()
+        self._base = MobileBaseDrive(model, robot) if robot.base is not None else None
         self._renderer: MultiCameraRenderer | None = None
         self._body_ids: dict[tuple[str, ...], np.ndarray] = {}
 
@@ -127,6 +129,8 @@ class MujocoBackend(Backend, SceneState):
         for act, grip, (arm, g) in zip(self._arm_act, self._grip_act, self._slices, strict=True):
             self.data.ctrl[act] = command[arm]
             self.data.ctrl[grip] = command[g]
+        if self._base is not None:
+            self._base.command(self.data, command[self.robot.base_slice])
 
     def step(self) -> None:
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
@@ -164,6 +168,11 @@ class MujocoBackend(Backend, SceneState):
                 for f, t in zip(self._force_adr, self._torque_adr, strict=True)
             ]
         )
+
+    def measured_base_velocity(self) -> np.ndarray:
+        if self._base is None:
+            return super().measured_base_velocity()
+        return self._base.measured(self.data)
 
     def tactile(self) -> dict[str, np.ndarray]:
         return {key: grid.read(self.data) for key, grid in self._tactile.items()}
@@ -217,7 +226,10 @@ class MujocoBackend(Backend, SceneState):
         return self.kinematics[arm].ik(target, q_init).qpos
 
     def world_to_root(self, arm: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
-        return self.kinematics[arm].world_to_root(pos, rot)
+        if self._base is None:
+            return self.kinematics[arm].world_to_root(pos, rot)
+        # On a mobile base the root frame moves: use its current pose, not the model's.
+        return pose_in_body(self.data, self.robot.arms[arm].root_frame, pos, rot)
 
     # ---------------------------------------------------------------- scene state
     @property

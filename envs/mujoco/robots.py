@@ -94,6 +94,9 @@ MUJOCO_BUILDERS: dict[str, Callable[..., RobotModel]] = {
     "panda": _builder("panda", "build_panda", mesh_options=False),
     "kinova_gen3": _builder("kinova_gen3", "build_kinova_gen3"),
     "crx5ia": _builder("crx5ia", "build_crx5ia"),
+    "g1": _builder("g1", "build_g1"),
+    "aloha": _builder("aloha", "build_aloha"),
+    "hsr": _builder("hsr", "build_hsr", mesh_options=False),
 }
 """Robot short name -> its MuJoCo model builder, called with the robot's record and keyword
 options (``visual_mesh_error``, ``mesh_cache``). Every builder takes the robot's facts (joints,

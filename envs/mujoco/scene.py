@@ -60,6 +60,26 @@ def _add_materials(spec: mujoco.MjSpec) -> None:
     spec.add_material(name="stand", rgba=[0.05, 0.22, 0.48, 1.0], specular=0.3)
 
 
+def _add_table(world: mujoco.MjsBody, workspace: Workspace) -> None:
+    """The workspace's table: a base box from the floor and the board on it."""
+    table = workspace.table
+    hx, hy = table.half_size
+    cx, cy, top = table.top_centre
+    body = world.add_body(name="table", pos=[cx, cy, 0.0])
+    base = table.base_half_z
+    body.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, base], pos=[0, 0, base], material="table_base"
+    )
+    board = TABLE_TOP_THICKNESS / 2
+    body.add_geom(
+        name="table_top",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[hx, hy, board],
+        pos=[0, 0, top - board],
+        material="table_top",
+    )
+
+
 def build_scene(
     robot: RobotModel, workspace: Workspace, *, max_render_size: tuple[int, int] = (640, 480)
 ) -> mujoco.MjSpec:
@@ -94,21 +114,8 @@ def build_scene(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="floor"
     )
     table = workspace.table
-    hx, hy = table.half_size
-    cx, cy, top = table.top_centre
-    body = world.add_body(name="table", pos=[cx, cy, 0.0])
-    base = table.base_half_z
-    body.add_geom(
-        type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, base], pos=[0, 0, base], material="table_base"
-    )
-    board = TABLE_TOP_THICKNESS / 2
-    body.add_geom(
-        name="table_top",
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[hx, hy, board],
-        pos=[0, 0, top - board],
-        material="table_top",
-    )
+    if table.top_z > 0:  # a workspace whose "table top" is the floor (z = 0) has no table
+        _add_table(world, workspace)
     if robot.stand is not None:
         stand = world.add_body(name="stand")
         stand.add_geom(

@@ -10,6 +10,7 @@ with its record plus one entry in ``_RECORDS`` below.
 
 from __future__ import annotations
 
+from rmb_lerobot.envs.robots.aloha import ALOHA
 from rmb_lerobot.envs.robots.common import (
     Arm,
     BodyCamera,
@@ -23,6 +24,8 @@ from rmb_lerobot.envs.robots.common import (
 )
 from rmb_lerobot.envs.robots.crx5ia import CRX5IA
 from rmb_lerobot.envs.robots.dual_ur5e import UR5E_DUAL
+from rmb_lerobot.envs.robots.g1 import G1
+from rmb_lerobot.envs.robots.hsr import HSR
 from rmb_lerobot.envs.robots.kinova_gen3 import KINOVA_GEN3
 from rmb_lerobot.envs.robots.panda import PANDA
 from rmb_lerobot.envs.robots.sawyer import SAWYER
@@ -30,7 +33,10 @@ from rmb_lerobot.envs.robots.ur5e import UR5E
 from rmb_lerobot.envs.robots.xarm7 import XARM7
 
 __all__ = [
+    "ALOHA",
     "CRX5IA",
+    "G1",
+    "HSR",
     "KINOVA_GEN3",
     "PANDA",
     "ROBOTS",
@@ -50,7 +56,18 @@ __all__ = [
     "robot_for",
 ]
 
-_RECORDS: tuple[Robot, ...] = (UR5E, UR5E_DUAL, XARM7, PANDA, SAWYER, KINOVA_GEN3, CRX5IA)
+_RECORDS: tuple[Robot, ...] = (
+    UR5E,
+    UR5E_DUAL,
+    XARM7,
+    PANDA,
+    SAWYER,
+    KINOVA_GEN3,
+    CRX5IA,
+    G1,
+    HSR,
+    ALOHA,
+)
 
 ROBOTS: dict[str, Robot] = {robot.name: robot for robot in _RECORDS}
 """Every robot by short name."""

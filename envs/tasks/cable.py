@@ -7,6 +7,10 @@ first at x = -0.1. As in RMB only the poles move: in x from -0.03 to +0.12 m acr
 worlds (the random shift moves them in x and y). RMB's other robots' scenes move this layout
 on their tables (:data:`PLACEMENTS`, keyed by workspace name): the Panda's and the dual UR5e's
 keep the UR5e's numbers, the xArm7's shifts it 9.5 cm along +x (connector at (-0.08, 0.2)).
+RMB's ALOHA scene (``env_aloha_cable.xml``) differs more: the connector at (-0.175, 0.25) is a
+loose box (the whole cable is free on the table), the poles stand 24 cm apart at y = 0.15, and
+its six worlds move them towards each other (pole 1 +1.5 cm per world, pole 2 its mirror image:
+gaps 24, 21, 18, 15, 12, 9 cm; the random shift moves both poles alike).
 
 The cable is an elastic rod of ``num_vertices`` points with inextensible edges: its first point
 is pinned to the connector and its last edge is clamped inside the end box (RMB welds the box
@@ -15,7 +19,8 @@ to the last link). How MuJoCo builds it: :mod:`rmb_lerobot.envs.mujoco.tasks.cab
 Success is RMB's ``_get_reward``: every cable point is below the pole centre height + 0.01 m,
 the end box is beyond the second pole (x >= pole2 x) and at least 0.05 m on the robot's right
 of the pole line (y <= pole1 y - 0.05), and some cable segment crosses the segment between the
-pole centres going +y (from the connector side towards the end).
+pole centres going +y (from the connector side towards the end). RMB's ALOHA Cable has no
+reward; the env uses this same rule on the ALOHA layout (the end box: the free end, cable_end).
 """
 
 from __future__ import annotations
@@ -50,10 +55,21 @@ POLE_SPACING = 0.05  # pole2 is this far along +x from pole1
 @dataclass(frozen=True)
 class CablePlacement:
     """Where a scene puts the cable's connector and the first pole (world x, y on its table);
-    the cable runs 0.48 m along -y from the connector, pole 2 stands 5 cm along +x of pole 1."""
+    the cable runs 0.48 m along -y from the connector, pole 2 stands ``pole_spacing`` along +x
+    of pole 1.
+
+    RMB's ALOHA scene differs in three ways, each a field here (the defaults are the UR5e's):
+    its worlds move pole 1 along +x and pole 2 by the mirror image (``mirror_poles``: the gap
+    narrows), its own ``world_offsets`` (x shifts of pole 1), and its cable lies loose on the
+    table (``free_connector``: the connector box has a free joint instead of being fixed).
+    """
 
     connector_xy: tuple[float, float]
     poles_xy: tuple[float, float]
+    pole_spacing: float = POLE_SPACING
+    mirror_poles: bool = False
+    world_offsets: tuple[float, ...] | None = None
+    free_connector: bool = False
 
 
 _UR5E_PLACEMENT = CablePlacement(
@@ -68,6 +84,19 @@ PLACEMENTS: dict[str, CablePlacement] = {
     # env_xarm7_cable.xml lines 40 (cable at -0.08 0.2 0.755, end at -0.08 -0.28 on line 44)
     # and 49 (poles at 0.02 0.1 0.74), on the xArm table (top z 0.74).
     "xarm_table": CablePlacement(connector_xy=(-0.08, 0.2), poles_xy=(0.02, 0.1)),
+    # env_aloha_cable.xml: the cable body (connector box cable_B0, with a free joint) at
+    # (-0.175, 0.25), its end at (-0.175, -0.23); the poles body at (0.04, 0, 0) with pole1 at
+    # (-0.12, 0.15) and pole2 at (+0.12, 0.15) in it, i.e. 24 cm apart around x = 0.04.
+    # MujocoAlohaCableEnv.modify_world shifts pole1 by +0.015 m per world and puts pole2 at
+    # its mirror image in the body (x -> -x): the gap shrinks from 24 to 9 cm over six worlds.
+    "aloha_table": CablePlacement(
+        connector_xy=(-0.175, 0.25),
+        poles_xy=(-0.08, 0.15),
+        pole_spacing=0.24,
+        mirror_poles=True,
+        world_offsets=(0.0, 0.015, 0.03, 0.045, 0.06, 0.075),
+        free_connector=True,
+    ),
 }
 """RMB's cable layout per workspace (:attr:`Workspace.name`)."""
 
@@ -127,6 +156,20 @@ class CableTask(Task):
         table = workspace.table
         self.anchor_pos = table.on_top(*placement.connector_xy, CABLE_RADIUS)
         self.poles_nominal_pos = table.on_top(*placement.poles_xy)
+        self.pole_spacing = placement.pole_spacing
+        self.mirror_poles = placement.mirror_poles
+        self.free_connector = placement.free_connector
+        if placement.world_offsets is not None:
+            self.world_offsets = np.array([[x, 0.0, 0.0] for x in placement.world_offsets])
+
+    def pole2_local_x(self, world_idx: int) -> float:
+        """Pole 2's x in the poles body (pole 1 at its origin) in world ``world_idx``:
+        ``pole_spacing``, or, with mirrored poles, minus twice the world's x shift (pole 2 moves
+        by the mirror image of pole 1's shift, as RMB's ALOHA worlds do). A random shift moves
+        the body, so both poles alike: the gap stays the world's."""
+        if self.mirror_poles:
+            return self.pole_spacing - 2.0 * float(self.world_offsets[world_idx][0])
+        return self.pole_spacing
 
     def cable_points(self, scene: SceneState) -> np.ndarray:
         """World positions of the cable's vertices, connector first (n, 3)."""

@@ -96,3 +96,48 @@ def test_dual_arm_demos_convert_with_their_layout(tmp_path, make_expert_dataset)
         "right_arm",
         "right_gripper",
     ]
+
+
+def test_g1_demos_convert_with_arms_and_hands(tmp_path, make_expert_dataset):
+    """The G1's 16-number joint vector is per arm (left 7 joints + hand, right 7 + hand), its
+    camera the ``head``: the dataset's robot type, features and modality.json say so."""
+    dataset = make_expert_dataset(
+        "g1_bottles", tmp_path / "demos", world_idx=(0,), cameras=("head",), size=16
+    )
+    info = _info(dataset)
+    assert info["robot_type"] == "g1"
+    names = info["features"][N.STATE]["names"]
+    assert len(names) == 16 and info["features"][N.ACTION_KEY]["shape"] == [16]
+    assert names[7] == "measured_joint_pos.gripper_0"
+    assert names[15] == "measured_joint_pos.gripper_1"
+    assert N.image_key("head") in info["features"]
+    modality = json.loads((dataset / N.GR00T_MODALITY_PATH).read_text())
+    assert [(name, g["start"], g["end"]) for name, g in modality["state"].items()] == [
+        ("left_arm", 0, 7),
+        ("left_gripper", 7, 8),
+        ("right_arm", 8, 15),
+        ("right_gripper", 15, 16),
+    ]
+
+
+def test_aloha_demos_convert_with_both_arms_and_their_cameras(tmp_path, make_expert_dataset):
+    """ALOHA's 14-number joint vector is per arm (left 6 joints + finger opening, right 6 +
+    finger opening), its cameras RMB's (no ``front``): the dataset's robot type, features and
+    modality.json say so. (Train and eval: tests/cli/test_aloha_handover_e2e.py.)"""
+    dataset = make_expert_dataset(
+        "aloha_handover", tmp_path / "demos", world_idx=(0,), cameras=("overhead_cam",), size=16
+    )
+    info = _info(dataset)
+    assert info["robot_type"] == "aloha"
+    names = info["features"][N.STATE]["names"]
+    assert len(names) == 14 and info["features"][N.ACTION_KEY]["shape"] == [14]
+    assert names[6] == "measured_joint_pos.gripper_0"
+    assert names[13] == "measured_joint_pos.gripper_1"
+    assert N.image_key("overhead_cam") in info["features"]
+    modality = json.loads((dataset / N.GR00T_MODALITY_PATH).read_text())
+    assert [(name, g["start"], g["end"]) for name, g in modality["state"].items()] == [
+        ("left_arm", 0, 6),
+        ("left_gripper", 6, 7),
+        ("right_arm", 7, 13),
+        ("right_gripper", 13, 14),
+    ]

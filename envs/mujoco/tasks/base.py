@@ -50,16 +50,19 @@ class MujocoTaskScene[T: Task]:
 _MODULE = "rmb_lerobot.envs.mujoco.tasks"
 
 MUJOCO_TASK_SCENES: dict[str, str] = {
+    "bottles": f"{_MODULE}.bottles:BottlesScene",
     "cabinet_hinge": f"{_MODULE}.cabinet:CabinetHingeScene",
     "cabinet_slide": f"{_MODULE}.cabinet:CabinetSlideScene",
     "cable": f"{_MODULE}.cable:CableScene",
     "cloth": f"{_MODULE}.cloth:ClothScene",
     "door": f"{_MODULE}.door:DoorScene",
+    "handover": f"{_MODULE}.handover:HandoverScene",
     "insert": f"{_MODULE}.insert:InsertScene",
     "particle": f"{_MODULE}.particle:ParticleScene",
     "pick": f"{_MODULE}.pick:PickScene",
     "pusht": f"{_MODULE}.pusht:PushTScene",
     "ring": f"{_MODULE}.ring:RingScene",
+    "tidyup": f"{_MODULE}.tidyup:TidyUpScene",
     "toolbox": f"{_MODULE}.toolbox:ToolboxScene",
 }
 """Task name -> ``"module:Class"`` of its MuJoCo scene builder (imported when first used)."""

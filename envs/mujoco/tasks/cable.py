@@ -6,7 +6,10 @@ inextensible edges), built directly with :class:`mujoco.MjSpec`: MuJoCo 4 remove
 pinned to the connector (a ball joint, like RMB's first hinge pair) and its last edge is
 clamped inside the end box (RMB welds the box to the last link). Rod elasticity needs MuJoCo's
 ``discrete`` integrator, so this scene switches to it (the arms' servos stay stable under it
-thanks to their joints' armature: see the xArm7 model's ``ARMATURE``).
+thanks to their joints' armature: see the xArm7 model's ``ARMATURE``). In RMB's ALOHA layout
+(:attr:`CablePlacement.free_connector`) the connector box is a free, colliding body instead,
+and the worlds move pole 2 by the mirror image of pole 1's shift
+(:attr:`CablePlacement.mirror_poles`).
 """
 
 from __future__ import annotations
@@ -30,7 +33,6 @@ from rmb_lerobot.envs.tasks.cable import (
     POLE2,
     POLE_HALF_HEIGHT,
     POLE_RADIUS,
-    POLE_SPACING,
     POLES,
     CableTask,
 )
@@ -51,7 +53,7 @@ class CableScene(MujocoTaskScene[CableTask]):
 
     def _build_poles(self, spec: mujoco.MjSpec) -> None:
         poles = spec.worldbody.add_body(name=POLES, pos=list(self.task.poles_nominal_pos))
-        for name, x in ((POLE1, 0.0), (POLE2, POLE_SPACING)):
+        for name, x in ((POLE1, 0.0), (POLE2, self.task.pole_spacing)):
             poles.add_geom(
                 name=name,
                 type=mujoco.mjtGeom.mjGEOM_CYLINDER,
@@ -71,14 +73,27 @@ class CableScene(MujocoTaskScene[CableTask]):
         vertex_mass = CABLE_MASS / n
 
         anchor = spec.worldbody.add_body(name=CABLE_ANCHOR, pos=list(self.task.anchor_pos))
-        anchor.add_geom(  # RMB's connector box at the fixed end (visual only)
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=list(END_BOX_HALF_SIZE),
-            quat=[np.cos(np.pi / 4), 0, 0, -np.sin(np.pi / 4)],
-            rgba=_YELLOW,
-            contype=0,
-            conaffinity=0,
-        )
+        if self.task.free_connector:
+            # RMB's ALOHA cable lies loose: its connector box is a free, colliding body, the
+            # first vertex on its centre (the first edge turns about it like a ball joint).
+            anchor.add_freejoint(name=CABLE_ANCHOR)
+            anchor.add_geom(
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=list(END_BOX_HALF_SIZE),
+                quat=[np.cos(np.pi / 4), 0, 0, -np.sin(np.pi / 4)],
+                mass=END_BOX_MASS,
+                rgba=_YELLOW,
+                friction=[1.0, 0.005, 0.0001],
+            )
+        else:
+            anchor.add_geom(  # RMB's connector box at the fixed end (visual only)
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=list(END_BOX_HALF_SIZE),
+                quat=[np.cos(np.pi / 4), 0, 0, -np.sin(np.pi / 4)],
+                rgba=_YELLOW,
+                contype=0,
+                conaffinity=0,
+            )
         bodies, verts = [CABLE_ANCHOR], [[0.0, 0.0, 0.0]]
         inertia = [vertex_mass * 1e-4] * 3  # point masses; MuJoCo needs a rotational inertia
         for i in range(1, n - 2):
@@ -139,6 +154,8 @@ class CableScene(MujocoTaskScene[CableTask]):
 
     def apply_world(self, sim: MujocoBackend, offset: np.ndarray) -> None:
         sim.model.body(POLES).pos = self.task.poles_nominal_pos + offset
+        if self.task.mirror_poles:
+            sim.model.geom(POLE2).pos[0] = self.task.pole2_local_x(self.task.world_idx)
 
     def reset_objects(self, sim: MujocoBackend) -> None:
         """Nothing to do: the cable starts straight and at rest in its build pose (``qpos0``),
