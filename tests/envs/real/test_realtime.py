@@ -17,11 +17,14 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "SCHED_FIFO"), reason="Linux sch
 
 
 def in_thread(fn):
-    """Run ``fn`` in a fresh thread (the pytest worker's own scheduling is never touched)."""
+    """Run ``fn`` in a fresh thread (the pytest worker's own scheduling is never touched),
+    under the normal policy: a thread inherits its creator's, and these tests start from
+    SCHED_OTHER whatever ran in the worker's main thread before."""
     out: dict = {}
 
     def target():
         try:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))  # lowering needs no right
             out["value"] = fn()
         except BaseException as exc:  # handed back to the test
             out["error"] = exc
