@@ -17,7 +17,8 @@ VENV := .venv
 # `spacemouse` (system hidapi) are left out: their tests use test doubles. The `docs` group builds the docs site (`make docs`, and
 # `make test` builds it --strict).
 EXTRAS := --extra vla --extra text --extra benchmark --extra viz --extra pybullet --extra gello --group docs
-STAMP := $(VENV)/.synced
+# The stamp's name changes when the way of syncing does, so an existing venv re-syncs once.
+STAMP := $(VENV)/.synced-bytecode
 
 .PHONY: help setup demo test lint docs docs-check format bench bench-learning bench-grid clean
 
@@ -29,10 +30,13 @@ help:
 	@echo "make bench-learning - train and evaluate every policy from scripted demos (about 1 h+)"
 	@echo "make bench-grid - the benchmark grid of benchmarks/grid_small.yaml on local Ray (hours)"
 
-# Re-sync whenever the lock or the project metadata changes.
+# Re-sync whenever the lock or the project metadata changes. --compile-bytecode writes every
+# package's .pyc once at install: where PYTHONDONTWRITEBYTECODE is set (as on these machines)
+# Python would otherwise compile torch, transformers and LeRobot from source in every process,
+# ~20 CPU s per lerobot-train / lerobot-eval / rmb-convert start (benchmarks/RESULTS.md).
 $(STAMP): pyproject.toml uv.lock .python-version
 	$(PYTHON) -m uv --version >/dev/null 2>&1 || $(PYTHON) -m pip install --quiet "uv>=0.9,<1"
-	$(PYTHON) -m uv sync --locked $(EXTRAS)
+	$(PYTHON) -m uv sync --locked --compile-bytecode $(EXTRAS)
 	touch $@
 
 setup: $(STAMP)

@@ -3,7 +3,8 @@
 LeRobot's CLIs call ``register_third_party_plugins()``, which imports every installed
 distribution whose name starts with ``lerobot_env_``; ours is ``lerobot_env_rmb`` and its
 import calls :func:`register_all`. Modules listed here register LeRobot ``EnvConfig`` /
-``PreTrainedConfig`` / ``RobotConfig`` / ``TeleoperatorConfig`` / ``CameraConfig`` subclasses
+``PreTrainedConfig`` / ``RobotConfig`` / ``TeleoperatorConfig`` / ``CameraConfig`` /
+``OptimizerConfig`` subclasses
 (``@EnvConfig.register_subclass(...)``) when imported, so adding an env family, a policy or a
 device means adding its module name to one of these tuples.
 """
@@ -31,6 +32,9 @@ POLICY_CONFIG_MODULES: tuple[str, ...] = (
     "rmb_lerobot.policies_extra.maniflow.configuration_maniflow",
 )
 
+# Modules whose import registers LeRobot optimizer types (``--optimizer.type=adamw_fused``).
+OPTIMIZER_CONFIG_MODULES: tuple[str, ...] = ("rmb_lerobot.optim.fused_adamw",)
+
 ENV_TYPE_PREFIX = "rmb_"
 
 
@@ -38,6 +42,7 @@ def register_all(
     env_modules: tuple[str, ...] = ENV_CONFIG_MODULES,
     policy_modules: tuple[str, ...] = POLICY_CONFIG_MODULES,
     device_modules: tuple[str, ...] = DEVICE_CONFIG_MODULES,
+    optimizer_modules: tuple[str, ...] = OPTIMIZER_CONFIG_MODULES,
 ) -> list[str]:
     """Import every registering module (idempotent); returns the module names imported.
 
@@ -45,7 +50,7 @@ def register_all(
     here is what makes a broken registration visible in our own tests.
     """
     imported = []
-    for name in (*env_modules, *policy_modules, *device_modules):
+    for name in (*env_modules, *policy_modules, *device_modules, *optimizer_modules):
         importlib.import_module(name)
         imported.append(name)
     return imported

@@ -57,7 +57,10 @@ def test_register_all_makes_env_types_known_to_lerobot(tmp_path, monkeypatch):
     )
     monkeypatch.syspath_prepend(str(tmp_path))
     imported = registration.register_all(
-        env_modules=("rmb_test_env_config",), policy_modules=(), device_modules=()
+        env_modules=("rmb_test_env_config",),
+        policy_modules=(),
+        device_modules=(),
+        optimizer_modules=(),
     )
     assert imported == ["rmb_test_env_config"]
     assert "rmb_registration_probe" in registration.registered_env_types()

@@ -27,6 +27,7 @@ from pathlib import Path
 
 from rmb_lerobot.cli.help import DefaultsHelpFormatter, first_line
 from rmb_lerobot.envs.registry import entry_for
+from rmb_lerobot.optim import fused_adamw_args
 
 TORCH_THREADS = 1  # per stage process, unless OMP_NUM_THREADS is set
 
@@ -46,6 +47,8 @@ LEROBOT_MODULES = {
 # pretrained backbone (nothing is downloaded), a smaller transformer, 20-step action chunks
 # replanned every 10 steps, and a learning rate for short runs (ACT's default 1e-5 is for
 # 100k-step trainings).
+ACT_LR = 1e-4
+ACT_WEIGHT_DECAY = 1e-4  # ACT's own default (ACTConfig.optimizer_weight_decay)
 ACT_CPU_ARGS = (
     "--policy.pretrained_backbone_weights=null",
     "--policy.chunk_size=20",
@@ -53,8 +56,12 @@ ACT_CPU_ARGS = (
     "--policy.dim_model=256",
     "--policy.dim_feedforward=1024",
     "--policy.n_encoder_layers=2",
-    "--policy.optimizer_lr=1e-4",
+    f"--policy.optimizer_lr={ACT_LR:g}",
 )
+# ACT's optimizer preset (AdamW at that lr and weight decay, no scheduler) with PyTorch's fused
+# AdamW kernel: the same update in less CPU time per training step (rmb_lerobot.optim;
+# benchmarks/optimizer_step.py, RESULTS.md "Main job").
+ACT_OPTIMIZER_ARGS = fused_adamw_args(lr=ACT_LR, weight_decay=ACT_WEIGHT_DECAY)
 
 
 @dataclass(frozen=True)
@@ -92,7 +99,8 @@ def act_train_stage(
     log_every: int,
     num_workers: int,
 ) -> Stage:
-    """``lerobot-train`` of LeRobot's ACT with the CPU recipe (:data:`ACT_CPU_ARGS`) on a local
+    """``lerobot-train`` of LeRobot's ACT with the CPU recipe (:data:`ACT_CPU_ARGS`, fused AdamW:
+    :data:`ACT_OPTIMIZER_ARGS`) on a local
     dataset, its env type given by ``env_args``, evaluated afterwards by ``lerobot-eval``.
 
     Args:
@@ -116,6 +124,7 @@ def act_train_stage(
             f"--dataset.root={dataset}",
             "--policy.type=act",
             *ACT_CPU_ARGS,
+            *ACT_OPTIMIZER_ARGS,
             "--policy.device=cpu",
             "--policy.push_to_hub=false",
             *env_args,
@@ -168,7 +177,10 @@ def pipeline(args: argparse.Namespace) -> list[Stage]:
             str(out / "rmb"),
             f"--repo-id={repo_id}",
             f"--output={out / 'dataset'}",
-            f"--workers={args.workers}",
+            # One process: a second one costs more than it saves on the demo's 30 short
+            # episodes (each worker imports LeRobot; the shards are merged afterwards): 33 vs
+            # 65 CPU s (benchmarks/RESULTS.md "Main job").
+            "--workers=1",
             # Only what ACT reads: LeRobot's loader reads every column of a sampled row
             # (0.62x CPU per sample; benchmarks/RESULTS.md "Training data path").
             "--no-extra-keys",
@@ -334,7 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="eval step limit (None: the task's own)",
     )
-    parser.add_argument("--workers", type=int, default=2, help="processes for collect/convert/eval")
+    parser.add_argument("--workers", type=int, default=2, help="processes for collect and eval")
     parser.add_argument(
         "--seed", type=int, default=1, help="training seed (evaluation uses seed + 1000)"
     )
