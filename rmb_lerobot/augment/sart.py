@@ -128,10 +128,16 @@ class AugmentConfig:
     fmt: str | None = None  # "rmb" or "hdf5"; default: the demo's
     overwrite: bool = False
     command_shift: int | None = None  # None: 2 x the controller lag measured in the demo
+    # The demo's random object shift (metres; rmb-collect --random-shift). The episode records
+    # only its world, so a shifted demo's objects are placed again by resetting with the same
+    # shift and the seed the demo was reset with: ``seed`` must then be that seed.
+    random_shift: float = 0.0
 
     def __post_init__(self) -> None:
         if self.samples_per_region < 1:
             raise ValueError(f"samples_per_region must be >= 1, got {self.samples_per_region}")
+        if self.random_shift < 0:
+            raise ValueError(f"random_shift must be >= 0 metres, got {self.random_shift}")
         if self.duration_s <= 0:
             raise ValueError(f"duration_s must be > 0, got {self.duration_s}")
 
@@ -251,6 +257,8 @@ class Augmenter:
     # ------------------------------------------------------------------ env helpers
     def _reset_options(self) -> dict[str, Any]:
         options: dict[str, Any] = {"world_idx": int(self.demo.attrs.get(K.ATTR_WORLD_IDX, 0))}
+        if self.config.random_shift:
+            options["random_shift"] = self.config.random_shift
         if "instruction" in self.env.task.reset_options and self.demo.attrs.get(K.ATTR_TASK_DESC):
             options["instruction"] = self.demo.attrs[K.ATTR_TASK_DESC]
         return options

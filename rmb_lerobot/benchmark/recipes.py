@@ -110,13 +110,16 @@ def policy_option_args(options: Mapping[str, Any]) -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class EnvInputs:
-    """What the env shows the policy: task, cameras, image size, depth, step limit."""
+    """What the env shows the policy: task, cameras, image size, depth, step limit, and what
+    its actions mean (``action_mode``: joint, eef_abs or eef_rel; only a non-joint mode is
+    passed, as ``--env.action_mode``)."""
 
     task: str
     cameras: tuple[str, ...]
     image_size: tuple[int, int] = (64, 64)  # width, height
     depth: bool = False
     episode_length: int | None = None
+    action_mode: str = "joint"
 
     def args(self) -> list[str]:
         width, height = self.image_size
@@ -130,6 +133,8 @@ class EnvInputs:
             args.append("--env.depth=true")
         if self.episode_length:
             args.append(f"--env.episode_length={self.episode_length}")
+        if self.action_mode != "joint":
+            args.append(f"--env.action_mode={self.action_mode}")
         return args
 
 

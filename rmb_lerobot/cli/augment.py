@@ -53,6 +53,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--seed", type=int, default=0, help="env reset seed and sampling seed")
     parser.add_argument(
+        "--random-shift",
+        type=float,
+        default=0.0,
+        metavar="METRES",
+        help="the demo's rmb-collect --random-shift: its objects are placed again from --seed, "
+        "which must then be the seed the demo was reset with (rmb-collect: --seed + episode "
+        "index, for an episode kept at its first attempt); without it a shifted demo is "
+        "augmented in its world's unshifted scene",
+    )
+    parser.add_argument(
         "--radius", type=float, default=0.02, help="metres, for proposed regions (default 0.02)"
     )
     parser.add_argument(
@@ -99,6 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             duration_s=args.duration,
             rotation_scale=args.rotation_scale,
             seed=args.seed,
+            random_shift=args.random_shift,
             fmt=args.fmt,
             overwrite=args.overwrite,
         )

@@ -246,6 +246,39 @@ def test_samples_are_reproducible_and_distinct(insert_demo, augmented, tmp_path)
     assert min(gaps) > 1e-3
 
 
+def test_a_shifted_demo_is_restored_with_its_shift_and_seed(tmp_path):
+    """A demo collected with a random object shift: the augmenter places the objects as the
+    demo had them when given the demo's shift and reset seed, and not without the shift."""
+    config = CollectConfig(
+        env="insert",
+        out=tmp_path / "demo",
+        episodes=1,
+        world_idx=(2,),
+        cameras=("hand",),
+        image_size=(32, 32),
+        depth=False,
+        random_shift=0.02,
+        seed=7,
+    )
+    collector = Collector(config)
+    try:
+        result = collector.record(0)
+        demo_offset = collector.env.world_offset.copy()
+    finally:
+        collector.close()
+    assert result.success and not result.failures  # reset with seed 7 + episode 0
+    offsets = {}
+    for shift in (0.02, 0.0):
+        augment = AugmentConfig(samples_per_region=1, seed=7, random_shift=shift)
+        with Augmenter("insert", result.path, tmp_path / "aug", augment) as augmenter:
+            augmenter._restore(REGION.time_idx)
+            offsets[shift] = augmenter.env.world_offset.copy()
+    np.testing.assert_array_equal(offsets[0.02], demo_offset)
+    assert np.abs(offsets[0.0] - demo_offset).max() > 1e-3  # the world's unshifted scene
+    with pytest.raises(ValueError, match="random_shift must be >= 0"):
+        AugmentConfig(samples_per_region=1, random_shift=-0.01)
+
+
 def test_the_demo_must_come_from_the_env_named(insert_demo, tmp_path):
     with pytest.raises(RmbFormatError, match="recorded in 'MujocoUR5eInsertEnv', not in"):
         Augmenter("door", insert_demo, tmp_path, AugmentConfig(samples_per_region=1))
