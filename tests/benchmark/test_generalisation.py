@@ -197,3 +197,10 @@ def test_the_paper_scale_grid_is_8_tasks_4_policies_5_seeds_on_gpus_with_unseen_
     # The file's header counts these cells (and its cost estimate builds on them).
     assert [kinds.count(k) for k in ("collect", "convert", "train", "eval")] == [8, 8, 160, 1920]
     assert not set(collect_seed_range(grid)) & set(eval_seed_range(grid))
+
+
+def test_the_unseen_grid_collects_and_evaluates_under_disjoint_shifts():
+    config = load_config(Path(__file__).parents[2] / "benchmarks" / "grid_unseen.yaml")
+    assert config.collect_shift == config.eval_shift == 0.02
+    assert set(config.tasks) == {"insert", "door", "cabinet_slide", "cloth"}
+    assert {p.name for p in config.policies} == {"mlp", "act", "diffusion", "sarnn"}
