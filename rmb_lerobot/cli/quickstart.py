@@ -59,8 +59,11 @@ ACT_CPU_ARGS = (
     f"--policy.optimizer_lr={ACT_LR:g}",
 )
 # ACT's optimizer preset (AdamW at that lr and weight decay, no scheduler) with PyTorch's fused
-# AdamW kernel: the same update in less CPU time per training step (rmb_lerobot.optim;
-# benchmarks/optimizer_step.py, RESULTS.md "Main job").
+# AdamW kernel: the same update in 0.82x the CPU per step (rmb_lerobot.optim;
+# benchmarks/optimizer_step.py). Not the quick start's default: its three runs so far succeeded
+# less often (10/12 at 500 steps, 8/12 at 1000) than LeRobot's AdamW's (12/12 at 500 and at
+# 1000), which 12-episode evaluations of single seeds cannot tell from chance (RESULTS.md
+# "Main job").
 ACT_OPTIMIZER_ARGS = fused_adamw_args(lr=ACT_LR, weight_decay=ACT_WEIGHT_DECAY)
 
 
@@ -98,9 +101,9 @@ def act_train_stage(
     seed: int,
     log_every: int,
     num_workers: int,
+    optimizer_args: Sequence[str] = (),
 ) -> Stage:
-    """``lerobot-train`` of LeRobot's ACT with the CPU recipe (:data:`ACT_CPU_ARGS`, fused AdamW:
-    :data:`ACT_OPTIMIZER_ARGS`) on a local
+    """``lerobot-train`` of LeRobot's ACT with the CPU recipe (:data:`ACT_CPU_ARGS`) on a local
     dataset, its env type given by ``env_args``, evaluated afterwards by ``lerobot-eval``.
 
     Args:
@@ -113,6 +116,8 @@ def act_train_stage(
         seed: Training seed.
         log_every: Steps between log lines.
         num_workers: Data loader workers.
+        optimizer_args: ``lerobot-train`` optimizer arguments replacing ACT's preset, e.g.
+            :data:`ACT_OPTIMIZER_ARGS` (none: LeRobot's AdamW preset).
 
     Returns:
         The stage.
@@ -124,7 +129,7 @@ def act_train_stage(
             f"--dataset.root={dataset}",
             "--policy.type=act",
             *ACT_CPU_ARGS,
-            *ACT_OPTIMIZER_ARGS,
+            *optimizer_args,
             "--policy.device=cpu",
             "--policy.push_to_hub=false",
             *env_args,
