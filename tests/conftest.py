@@ -9,6 +9,7 @@ using PyAV in place of the ffmpeg binary. They let the tests check compatibility
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -276,3 +277,13 @@ def shared_expert_dataset(tmp_path_factory):
         return done / "dataset"
 
     return _shared
+
+
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler for the test, as in a fresh interpreter: tests that simulate
+    Ctrl-C with ``_thread.interrupt_main`` need it, and an earlier test in the same worker (a
+    library deferring or ignoring SIGINT) may have left another one. Restored afterwards."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)

@@ -118,7 +118,7 @@ def test_a_policy_emitting_nan(make_env, tmp_path):
     record_with_fault(make_env(), tmp_path, nan, refused, "non-finite|not finite")
 
 
-def test_ctrl_c_during_a_reset_move(make_env, tmp_path):
+def test_ctrl_c_during_a_reset_move(make_env, tmp_path, python_sigint):
     env = make_env()
     env.reset(seed=0)
     twin = env.sim.device.twins[0]

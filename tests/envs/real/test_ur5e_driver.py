@@ -172,7 +172,7 @@ def test_stale_timestamps(driver, twin):
     assert isinstance(StaleState("x"), ConnectionLost)
 
 
-def test_ctrl_c_during_a_move_stops_the_arm(twin):
+def test_ctrl_c_during_a_move_stops_the_arm(twin, python_sigint):
     twin.reset()
     goal = HOME + np.array([0.8, 0, 0, 0, 0, 0])
     timer = threading.Timer(0.5, _thread.interrupt_main)

@@ -183,7 +183,7 @@ def test_stale_state(driver, twin):
     assert isinstance(caught.value, SdkError)
 
 
-def test_ctrl_c_during_a_move_stops_the_arm(twin):
+def test_ctrl_c_during_a_move_stops_the_arm(twin, python_sigint):
     twin.reset()
     goal = HOME + np.array([0.8, 0, 0, 0, 0, 0, 0])
     timer = threading.Timer(0.5, _thread.interrupt_main)
