@@ -43,8 +43,17 @@ def test_the_pipeline_is_the_four_unmodified_command_line_tools(tmp_path):
             "--env.image_height=64",
         } <= set(stage.args)
     assert {"--policy.type=act", "--policy.pretrained_backbone_weights=null"} <= set(train.args)
-    # LeRobot's own AdamW preset for ACT (adamw_fused is opt-in: ACT_OPTIMIZER_ARGS).
+    # LeRobot's own AdamW preset for ACT; --fused-adamw replaces it by the same AdamW, fused.
     assert not [a for a in train.args if a.startswith(("--optimizer.", "--use_policy_training"))]
+    fused = pipeline(parse_args(["--out", str(tmp_path), "--fused-adamw"]))[2]
+    assert {
+        "--use_policy_training_preset=false",
+        "--optimizer.type=adamw_fused",
+        "--optimizer.lr=0.0001",
+        "--optimizer.weight_decay=0.0001",
+        "--scheduler.type=constant_with_warmup",
+        "--scheduler.num_warmup_steps=0",
+    } <= set(fused.args)
     assert "--workers=1" in convert.args  # one process beats two on 30 short episodes
     assert f"--policy.path={tmp_path}/train/checkpoints/last/pretrained_model" in evaluate.args
     # The unseen evaluation: the same policy and env, objects shifted 2 cm, its own seeds.
@@ -68,7 +77,8 @@ def test_an_unknown_env_is_refused_before_anything_runs(tmp_path):
 def test_main_job_end_to_end_at_a_tiny_size(tmp_path, capsys):
     out = tmp_path / "qs"
 
-    assert main(["--out", str(out), *TINY]) == 0
+    # With the opt-in fused AdamW: the ALOHA and HSR end-to-end tests train with the preset.
+    assert main(["--out", str(out), *TINY, "--fused-adamw"]) == 0
 
     printed = capsys.readouterr().out
     assert re.search(r"success rate: \d+\.\d % \([01]/1 episodes\)", printed)
@@ -81,6 +91,8 @@ def test_main_job_end_to_end_at_a_tiny_size(tmp_path, capsys):
     assert info["total_episodes"] == 2 and "observation.images.front" in info["features"]
     policy = out / "train" / "checkpoints" / "last" / "pretrained_model"
     assert json.loads((policy / "config.json").read_text())["type"] == "act"
+    train_config = json.loads((policy / "train_config.json").read_text())
+    assert train_config["optimizer"]["type"] == "adamw_fused"  # lerobot-train took our type
     eval_info = json.loads((out / "eval" / "eval_info.json").read_text())
     assert eval_info["overall"]["n_episodes"] == 1
     assert all(p.endswith(".mp4") for p in eval_info["overall"]["video_paths"])
