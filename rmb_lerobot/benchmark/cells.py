@@ -21,6 +21,7 @@ import re
 import shlex
 import shutil
 import subprocess
+import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -91,8 +92,14 @@ def merged_durations(upstream: Sequence[CellResult]) -> dict[str, float | None]:
     return durations
 
 
-def execute(cell: Cell, upstream: Sequence[CellResult]) -> CellResult:
-    """Run ``cell`` (its upstream cells' results given); never raises for a failure."""
+def execute(
+    cell: Cell, upstream: Sequence[CellResult], cancel: threading.Event | None = None
+) -> CellResult:
+    """Run ``cell`` (its upstream cells' results given); never raises for a failure.
+
+    ``cancel``, when set, stops the command (``KeyboardInterrupt`` in the calling thread): how
+    the local executor stops the commands its threads run.
+    """
     durations = merged_durations(upstream)
     failed = next((u for u in upstream if not u.ok), None)
     if failed is not None:
@@ -109,7 +116,7 @@ def execute(cell: Cell, upstream: Sequence[CellResult]) -> CellResult:
             _remove(path)
         cell.record.unlink(missing_ok=True)
         returncode, seconds = run_logged(
-            cell.stage, cell.log, threads=cell.num_cpus, launcher=cell.launcher
+            cell.stage, cell.log, threads=cell.num_cpus, launcher=cell.launcher, cancel=cancel
         )
         if returncode != 0:
             reason = f"{cell.stage.name} exited with status {returncode}"
@@ -146,13 +153,18 @@ def _remove(path: Path) -> None:
 
 
 def run_logged(
-    stage: Stage, log: Path, threads: float = 1, launcher: Sequence[str] = ()
+    stage: Stage,
+    log: Path,
+    threads: float = 1,
+    launcher: Sequence[str] = (),
+    cancel: threading.Event | None = None,
 ) -> tuple[int, float]:
     """Run ``stage`` (after the ``launcher`` prefix, if any) with stdout and stderr in ``log``;
     returns (exit status, seconds).
 
     Offline (no Hub, no wandb), headless rendering, and as many torch/OpenMP threads as the
-    cell's CPUs. An exception here (e.g. Ray cancelling the task) stops the command too.
+    cell's CPUs. An exception here (e.g. Ray cancelling the task) stops the command too, and so
+    does setting ``cancel`` (it raises ``KeyboardInterrupt`` here once the command is stopped).
     """
     log.parent.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
@@ -167,7 +179,7 @@ def run_logged(
         argv = [*launcher, *stage.argv()]
         process = subprocess.Popen(argv, stdout=stream, stderr=subprocess.STDOUT, env=env)
         try:
-            returncode = process.wait()
+            returncode = _wait(process, cancel)
         finally:
             if process.poll() is None:  # interrupted: do not leave the command running
                 process.terminate()
@@ -177,6 +189,17 @@ def run_logged(
                     process.kill()
                     process.wait()
     return returncode, time.perf_counter() - start
+
+
+def _wait(process: subprocess.Popen, cancel: threading.Event | None) -> int:
+    if cancel is None:
+        return process.wait()
+    while True:
+        try:
+            return process.wait(timeout=0.5)
+        except subprocess.TimeoutExpired:
+            if cancel.is_set():
+                raise KeyboardInterrupt("cell cancelled") from None
 
 
 def log_tail(log: Path, lines: int = TAIL_LINES) -> str:

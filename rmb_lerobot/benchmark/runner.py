@@ -1,4 +1,5 @@
-"""Run a benchmark grid on Ray: every collect, convert, train and eval cell is a Ray task.
+"""Run a benchmark grid on Ray: every collect, convert, train and eval cell is a Ray task (with
+``executor="local"``, a thread of this process instead: ``local.py``).
 
 A cell's Ray task gets its upstream cells' results as arguments (``ObjectRef``s, or the results
 of cells done in an earlier run), so Ray starts it when they are ready, on any node with the
@@ -17,7 +18,7 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from tqdm import tqdm
 from rmb_lerobot.benchmark.cells import Cell, CellResult, execute, merged_durations, recorded
 from rmb_lerobot.benchmark.config import BenchmarkConfig
 from rmb_lerobot.benchmark.grid import plan
+from rmb_lerobot.benchmark.local import run_locally
 from rmb_lerobot.benchmark.report import (
     CURVES_FILE,
     RESULTS_FILE,
@@ -92,6 +94,9 @@ def init_ray(address: str | None = None, num_cpus: int | None = None, num_gpus: 
     return ray
 
 
+EXECUTORS = ("ray", "local")
+
+
 def run_benchmark(
     config: BenchmarkConfig,
     *,
@@ -99,17 +104,36 @@ def run_benchmark(
     num_cpus: int | None = None,
     progress: bool = True,
     echo: Callable[[str], None] | None = None,
+    executor: str = "ray",
 ) -> Summary:
     """Run every cell of ``config`` not done yet, write the results and render the report.
 
-    Uses the Ray session already initialised in this process if there is one (and leaves it
-    running), otherwise starts one (``init_ray``) and shuts it down at the end.
+    Args:
+        config: the grid.
+        ray_address: an existing Ray cluster to join (``executor="ray"`` only).
+        num_cpus: CPUs of the local Ray, or of the local executor (default: all of them).
+        progress: show a progress bar.
+        echo: where failure lines go (default: above the progress bar).
+        executor: ``"ray"`` (local or cluster Ray; uses the Ray session already initialised in
+            this process if there is one and leaves it running, otherwise starts one and shuts
+            it down at the end) or ``"local"`` (threads on this machine, no Ray needed).
+
+    Returns:
+        What ran, what was done before, what failed, and the report's files.
+
+    Raises:
+        BenchmarkBusyError: another driver runs a grid with the same ``--out``.
+        ValueError: an unknown ``executor``, or ``ray_address`` with the local executor.
     """
+    if executor not in EXECUTORS:
+        raise ValueError(f"executor must be one of {EXECUTORS}, not {executor!r}")
+    if executor == "local" and ray_address:
+        raise ValueError(f"--ray-address {ray_address} needs the ray executor, not local")
     echo = echo or (lambda line: tqdm.write(line))
     out = config.out.absolute()
     out.mkdir(parents=True, exist_ok=True)
     with _exclusive(out):
-        return _run(config, out, ray_address, num_cpus, progress, echo)
+        return _run(config, out, ray_address, num_cpus, progress, echo, executor)
 
 
 @contextlib.contextmanager
@@ -126,7 +150,7 @@ def _exclusive(out: Path):
         yield
 
 
-def _run(config, out, ray_address, num_cpus, progress, echo) -> Summary:
+def _run(config, out, ray_address, num_cpus, progress, echo, executor) -> Summary:
     cells = plan(config)
     summary = Summary()
     results = summary.results
@@ -139,13 +163,17 @@ def _run(config, out, ray_address, num_cpus, progress, echo) -> Summary:
                 summary.skipped.append(cell.id)
             results[cell.id] = done  # done, or refused: recorded for another command
     needed = _needed(cells, results)
-    if needed:
+    if needed and executor == "local":
+        finished = run_locally(cells, needed, results, num_cpus=num_cpus or os.cpu_count() or 1)
+        _collect(finished, config, cells, needed, summary, progress, echo, out)
+    elif needed:
         ray = import_ray()
         started_here = not ray.is_initialized()
         if started_here:
             init_ray(ray_address, num_cpus)
         try:
-            _run_cells(ray, config, cells, needed, summary, progress, echo, out)
+            finished = _on_ray(ray, config, cells, needed, results)
+            _collect(finished, config, cells, needed, summary, progress, echo, out)
         finally:
             if started_here:
                 ray.shutdown()
@@ -161,7 +189,8 @@ def import_ray():
         import ray
     except ImportError:
         raise SystemExit(
-            "rmb-benchmark needs Ray: pip install 'lerobot_env_rmb[benchmark]'"
+            "rmb-benchmark needs Ray: pip install 'lerobot_env_rmb[benchmark]', or run it with "
+            "--executor local (this machine's CPUs, no Ray)"
         ) from None
     return ray
 
@@ -179,12 +208,14 @@ def _needed(cells: dict[str, Cell], results: dict[str, CellResult]) -> list[str]
     return [cid for cid in cells if cid in needed]  # dependency order
 
 
-def _run_cells(ray, config, cells, needed, summary, progress, echo, out) -> None:
+def _on_ray(ray, config, cells, needed, done) -> Iterator[tuple[str, CellResult]]:
+    """Every needed cell as a Ray task (upstream results as ObjectRef arguments); yields
+    ``(id, result)`` as they end. Stopped early (Ctrl-C), it cancels the tasks still pending."""
     remote = ray.remote(_execute_remote)
     refs: dict[str, Any] = {}
     for cid in needed:
         cell = cells[cid]
-        args = [refs[u] if u in refs else summary.results[u] for u in cell.upstream]
+        args = [refs[u] if u in refs else done[u] for u in cell.upstream]
         refs[cid] = remote.options(
             num_cpus=cell.num_cpus,
             num_gpus=cell.num_gpus,
@@ -193,29 +224,39 @@ def _run_cells(ray, config, cells, needed, summary, progress, echo, out) -> None
         ).remote(cell, *args)
     by_ref = {ref: cid for cid, ref in refs.items()}
     pending = list(refs.values())
-    bar = tqdm(total=len(pending), desc="benchmark cells", unit="cell", disable=not progress)
-    failures = 0
+    results = dict(done)
     try:
         while pending:
             ready, pending = ray.wait(pending, num_returns=1)
             for ref in ready:
                 cid = by_ref[ref]
-                result = _get(ray, ref, cells[cid], summary.results)
-                summary.results[cid] = result
-                summary.ran.append(cid)
-                if not result.ok:
-                    failures += 1
-                    if result.failed_cell == cid:
-                        echo(f"FAILED {cid}: {short_error(result.error)}")
-                bar.set_postfix(failed=failures, last=cid.split("/")[0])
-                bar.update()
-                if cells[cid].kind == "eval":
-                    _write_outputs(config, cells, summary, out)
-    except KeyboardInterrupt:
+                results[cid] = _get(ray, ref, cells[cid], results)
+                yield cid, results[cid]
+    except BaseException:  # Ctrl-C, or the caller stopped early
         for ref in pending:
             ray.cancel(ref)  # KeyboardInterrupt in the task: it stops its command
         raise
+
+
+def _collect(finished, config, cells, needed, summary, progress, echo, out) -> None:
+    """Record each finished cell, report failures, and rewrite the results after every
+    evaluation (a grid stopped half-way still has its finished rows)."""
+    bar = tqdm(total=len(needed), desc="benchmark cells", unit="cell", disable=not progress)
+    failures = 0
+    try:
+        for cid, result in finished:
+            summary.results[cid] = result
+            summary.ran.append(cid)
+            if not result.ok:
+                failures += 1
+                if result.failed_cell == cid:
+                    echo(f"FAILED {cid}: {short_error(result.error)}")
+            bar.set_postfix(failed=failures, last=cid.split("/")[0])
+            bar.update()
+            if cells[cid].kind == "eval":
+                _write_outputs(config, cells, summary, out)
     finally:
+        finished.close()  # stopped early: the executor stops what still runs
         bar.close()
         _write_outputs(config, cells, summary, out)
 

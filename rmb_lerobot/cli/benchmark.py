@@ -30,7 +30,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Options given here override the config file's keys. Local Ray by default (all "
         "CPUs of this machine, no dashboard); --ray-address joins a running cluster, where --out "
         "must be a path every node sees (a shared filesystem), with this package installed on "
-        "every node. Exit status: 0 all cells succeeded, 1 some failed (see the report), 2 a "
+        "every node; --executor local runs the cells without Ray. Exit status: 0 all cells "
+        "succeeded, 1 some failed (see the report), 2 a "
         "bad config or command line (no CONFIG and no --example).",
     )
     parser.add_argument(
@@ -63,8 +64,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     grid.add_argument("--device", help="--policy.device for training and evaluation")
     ray = parser.add_argument_group("execution")
+    ray.add_argument(
+        "--executor",
+        choices=("ray", "local"),
+        default="ray",
+        help="ray: cells as Ray tasks (local Ray or --ray-address); local: threads on this "
+        "machine, no Ray needed (e.g. an offline GPU machine)",
+    )
     ray.add_argument("--ray-address", help="an existing Ray cluster (e.g. auto, ray://host:10001)")
-    ray.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
+    ray.add_argument(
+        "--num-cpus", type=int, help="CPUs of the local Ray or the local executor (default: all)"
+    )
     ray.add_argument("--dry-run", action="store_true", help="list the cells and their commands")
     ray.add_argument("--report-only", action="store_true", help="only re-render OUT/report")
     ray.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -99,6 +109,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
     if args.config is not None and args.example:
         parser.error(f"--example runs the built-in grid: give it or CONFIG {args.config}, not both")
+    if args.executor == "local" and args.ray_address:
+        parser.error(
+            f"--ray-address {args.ray_address} joins a Ray cluster: not with --executor local"
+        )
     try:
         config = load_config(args.config, overrides(args))
     except BenchmarkConfigError as error:
@@ -128,6 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 ray_address=args.ray_address,
                 num_cpus=args.num_cpus,
                 progress=not args.no_progress,
+                executor=args.executor,
             )
     except KeyboardInterrupt as exc:
         signum = interrupted_signal(exc)

@@ -1,11 +1,13 @@
-"""Stand-ins for the four tools of a grid cell, for the cluster test: ``launcher: [python, THIS]``.
+"""Stand-ins for the four tools of a grid cell (``launcher: [python, THIS]``), for the cluster
+and local-executor tests.
 
 A cell's command reaches this script as its arguments (``rmb-collect ...``, ``python -m
 lerobot.scripts.lerobot_train ...``); instead of running it, this writes what the real tool
 would leave for the runner (episodes with a joint trajectory, a dataset's ``meta/info.json``, a
 checkpoint folder, an ``eval_info.json``) after ``$FAKE_TOOL_SECONDS``. It first records which
-cell started on which node (``$FAKE_TOOL_MARKS/<n>-<node>-<cell>``, the node from
-``$RMB_TEST_NODE``, set per ``ray start``), so a test knows where to kill.
+cell started on which node and when (``$FAKE_TOOL_MARKS/<start ns>-<node>-<cell>``, the node
+from ``$RMB_TEST_NODE``, set per ``ray start``), so a test knows where to kill; at its end the
+mark holds the end time and gets ``.done`` appended.
 """
 
 from __future__ import annotations
@@ -38,6 +40,10 @@ def main(argv: list[str]) -> int:
     mark = marks / f"{time.time_ns()}-{os.environ.get('RMB_TEST_NODE', '?')}-{tool}-{name}"
     mark.touch()
     time.sleep(float(os.environ.get("FAKE_TOOL_SECONDS", "0")))
+    unknown = [a for a in args if a.startswith("--policy.no_such=")]
+    if unknown:  # as draccus refuses an option LeRobot's config does not have
+        print(f"error: unrecognized arguments: {unknown[0]}", file=sys.stderr)
+        return 2
     if tool == "rmb-collect":
         import h5py
         import numpy as np
@@ -63,6 +69,7 @@ def main(argv: list[str]) -> int:
         overall = {"pc_success": 100.0 * success, "n_episodes": episodes, "avg_sum_reward": 0.0}
         info = {"overall": overall, "per_task": [{"metrics": {"successes": [success] * episodes}}]}
         (out / "eval_info.json").write_text(json.dumps(info))
+    mark.write_text(str(time.time_ns()))  # when it ended: tests check how many ran at once
     mark.rename(mark.with_name(mark.name + ".done"))
     return 0
 
