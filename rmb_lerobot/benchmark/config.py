@@ -248,6 +248,7 @@ def apply_overrides(
     overrides = {k: v for k, v in overrides.items() if v is not None}
     steps = overrides.pop("steps", None)
     batch_size = overrides.pop("batch_size", None)
+    num_workers = overrides.pop("num_workers", None)
     only = overrides.pop("only_policies", None)
     raw.update(overrides)
     policies = raw.get("policies", ["act"])
@@ -271,6 +272,8 @@ def apply_overrides(
             spec["steps"] = steps
         if batch_size is not None:
             spec["batch_size"] = batch_size
+        if num_workers is not None:
+            spec["num_workers"] = num_workers
     if "tasks" in overrides:
         try:
             keep = {entry_for(t).name for t in _as_list(overrides["tasks"])}

@@ -58,6 +58,12 @@ def build_parser() -> argparse.ArgumentParser:
     grid.add_argument("--episode-length", type=int, help="eval step limit")
     grid.add_argument("--steps", type=int, help="training steps of every policy")
     grid.add_argument("--batch-size", type=int, help="batch size of every policy")
+    grid.add_argument(
+        "--num-workers",
+        type=int,
+        help="lerobot-train data-loader workers of every policy (on a GPU, video decoding is "
+        "what a step waits for)",
+    )
     grid.add_argument("--cameras", nargs="+", help="default cameras of the policies")
     grid.add_argument(
         "--image-size", nargs=2, type=int, metavar=("W", "H"), help="size of every camera"
@@ -93,6 +99,7 @@ def overrides(args: argparse.Namespace) -> dict:
         "episode_length": args.episode_length,
         "steps": args.steps,
         "batch_size": args.batch_size,
+        "num_workers": args.num_workers,
         "cameras": args.cameras,
         "image_size": args.image_size,
         "device": args.device,

@@ -54,11 +54,13 @@ def test_command_line_overrides_narrow_policies_tables_and_studies():
             "tasks": ["insert"],
             "only_policies": ["act", "act_front", "mlp"],
             "steps": 5,
+            "num_workers": 3,
             "seeds": [0, 1],
             "out": "/tmp/x",
         },
     )
     assert config.tasks == ("insert",) and config.seeds == (0, 1)
+    assert {p.num_workers for p in config.policies} == {3}
     assert [p.name for p in config.policies] == ["mlp", "act", "act_front"]
     assert {p.steps for p in config.policies} == {5}
     assert config.policy("act").batch_size == 8  # the file's, kept
